@@ -1,0 +1,44 @@
+"""Small numpy helpers for rotations and frames, shared by pipeline, io and robot."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+
+def unit(vectors: np.ndarray) -> np.ndarray:
+    """Rows of `vectors` scaled to length 1 (zero rows stay zero)."""
+    norms = np.linalg.norm(vectors, axis=-1, keepdims=True)
+    return np.divide(vectors, norms, out=np.zeros_like(vectors), where=norms > 0)
+
+
+def frames_from_axes(torch_axis: np.ndarray, travel: np.ndarray) -> np.ndarray:
+    """Tool frames (K, 3, 3) with z = torch axis, y = travel made perpendicular to z, x = y x z."""
+    z = unit(torch_axis)
+    y = unit(travel - np.sum(travel * z, axis=1, keepdims=True) * z)
+    x = np.cross(y, z)
+    return np.stack([x, y, z], axis=2)
+
+
+def quaternions_continuous(rotations: np.ndarray) -> np.ndarray:
+    """(K, 4) quaternions [qx, qy, qz, qw] of (K, 3, 3) matrices, each in the hemisphere of
+    the previous one (q_k . q_(k-1) >= 0), the first with qw >= 0."""
+    quats = Rotation.from_matrix(rotations).as_quat()
+    if len(quats) == 0:
+        return quats
+    if quats[0, 3] < 0:
+        quats[0] = -quats[0]
+    # Sign of each quaternion relative to the first: flip where the running product turns negative.
+    dots = np.sum(quats[1:] * quats[:-1], axis=1)
+    signs = np.concatenate([[1.0], np.cumprod(np.where(dots < 0, -1.0, 1.0))])
+    return quats * signs[:, None]
+
+
+def rotation_vectors(rotations: np.ndarray) -> np.ndarray:
+    """(K, 3) UR rotation vectors (axis * angle, angle in [0, pi]) of (K, 3, 3) matrices."""
+    return Rotation.from_matrix(rotations).as_rotvec()
+
+
+def transform_points(matrix: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Apply a 4x4 homogeneous transform to (N, 3) points."""
+    return points @ matrix[:3, :3].T + matrix[:3, 3]

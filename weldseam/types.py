@@ -1,0 +1,90 @@
+"""The few data types every part of weldseam shares.
+
+Units are metres and radians. Arrays are float64. The base frame is the robot base; the
+camera frame is OpenCV's (x right, y down, z forward).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from weldseam.errors import InputError
+
+
+def as_points(array, name: str = "points") -> np.ndarray:
+    """Return `array` as a C-contiguous float64 (N, 3) array, or raise InputError naming it."""
+    points = np.ascontiguousarray(array, dtype=np.float64)
+    if points.ndim != 2 or points.shape[1] != 3:
+        raise InputError(f"{name}: expected an (N, 3) array of x, y, z, got shape {points.shape}")
+    return points
+
+
+@dataclass(frozen=True)
+class Intrinsics:
+    """Pinhole intrinsics of a depth camera; `depth_scale` = depth units per metre."""
+
+    width: int
+    height: int
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+    depth_scale: float = 1000.0
+
+
+@dataclass(frozen=True)
+class Scan:
+    """A point cloud in the base frame, with where the camera was (to orient normals).
+
+    points_m: (N, 3) base-frame points in metres.
+    camera_origin_m: (3,) camera centre in the base frame, or None when unknown.
+    source: the file it came from ("-" for stdin), for messages and the output record.
+    sha256: hex digest of the input bytes, recorded in the output.
+    """
+
+    points_m: np.ndarray
+    camera_origin_m: np.ndarray | None = None
+    source: str = ""
+    sha256: str = ""
+
+
+@dataclass(frozen=True)
+class WeldPath:
+    """One seam's ordered torch path.
+
+    positions_m: (K, 3) base-frame points on the seam, in travel order.
+    rotations: (K, 3, 3) tool frames; column 0 = x = y cross z, column 1 = y = travel
+        direction, column 2 = z = torch axis pointing INTO the work.
+    closed: the seam is a loop (the last pose joins the first).
+    joint: "v_groove" or "fillet".
+    confidence: 0..1, how sure the detector is that this is a weld seam.
+    """
+
+    seam_id: int
+    positions_m: np.ndarray
+    rotations: np.ndarray
+    closed: bool = False
+    joint: str = "v_groove"
+    confidence: float = 1.0
+
+    @property
+    def length_m(self) -> float:
+        """Arc length along the poses (including the closing segment of a loop)."""
+        points = self.positions_m
+        if len(points) < 2:
+            return 0.0
+        if self.closed:
+            points = np.vstack([points, points[:1]])
+        return float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """What one `plan` run produced: the paths plus the record that reproduces them."""
+
+    paths: tuple[WeldPath, ...]
+    record: dict = field(default_factory=dict)
+    timings_s: dict = field(default_factory=dict)
+    warnings: tuple[str, ...] = ()
