@@ -1,0 +1,181 @@
+"""The one place where pipeline parameters and their defaults live.
+
+One frozen dataclass per stage, named like the stage module; lengths in metres (`_m`),
+angles in degrees (`_deg`). The CLI options and the output record derive from these.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field, fields
+
+from weldseam.errors import InputError
+
+
+def _param(default, help_text: str):
+    return field(default=default, metadata={"help": help_text})
+
+
+@dataclass(frozen=True)
+class ConditionConfig:
+    voxel_m: float = _param(0.001, "fine voxel size; points in one voxel merge to their centroid")
+    working_voxel_m: float = _param(
+        0.0025, "coarser voxel for the neighbourhood stages (normals, descriptor, segmentation)"
+    )
+    crop_min_m: tuple[float, float, float] | None = _param(None, "crop box lower corner (base frame)")
+    crop_max_m: tuple[float, float, float] | None = _param(None, "crop box upper corner (base frame)")
+    outlier_neighbours: int = _param(8, "k of the statistical outlier filter")
+    outlier_std_ratio: float = _param(3.0, "drop points whose mean k-NN distance exceeds mean + ratio * std")
+
+
+@dataclass(frozen=True)
+class SmoothConfig:
+    enabled: bool = _param(True, "bilateral smoothing along the normal (keeps creases)")
+    radius_m: float = _param(0.006, "neighbourhood radius of the smoother")
+    range_sigma_m: float | None = _param(
+        None, "offset scale of the bilateral weight; default: 2 x the median |normal offset|"
+    )
+
+
+@dataclass(frozen=True)
+class NormalsConfig:
+    radius_m: float = _param(0.010, "PCA neighbourhood radius")
+
+
+@dataclass(frozen=True)
+class DescriptorConfig:
+    variant: str = _param("released", "'released' (variance of cosines) or 'thesis' (angles, global term)")
+    radius_m: float = _param(0.010, "neighbourhood radius of the gradient descriptor")
+
+
+@dataclass(frozen=True)
+class SegmentConfig:
+    threshold: float | None = _param(None, "descriptor threshold; default: automatic (see segment.py)")
+    min_crease_deg: float = _param(20.0, "automatic threshold: the weakest crease that counts as a seam")
+    cluster_tolerance_m: float = _param(0.006, "Euclidean clustering distance between seam points")
+    min_seam_length_m: float = _param(0.02, "drop candidates shorter than this")
+
+
+@dataclass(frozen=True)
+class BoundaryConfig:
+    radius_m: float = _param(0.006, "neighbourhood radius; holes narrower than ~radius/3 are ignored")
+    shift_ratio: float = _param(0.25, "boundary if the neighbour centroid is off by > ratio * radius")
+
+
+@dataclass(frozen=True)
+class PairingConfig:
+    angle_tolerance_deg: float = _param(10.0, "partner direction within 90 +- this of the edge tangent")
+    max_width_m: float = _param(0.08, "widest band that is paired across")
+    width_tolerance: float = _param(0.25, "pairs wider or narrower than the local median by this fraction are dropped")
+
+
+@dataclass(frozen=True)
+class ThinningConfig:
+    radius_m: float = _param(0.005, "centroid radius")
+    iterations: int = _param(20, "centroid iterations")
+
+
+@dataclass(frozen=True)
+class GridConfig:
+    leaf_m: float = _param(0.003, "voxel leaf that merges the thinned points")
+
+
+@dataclass(frozen=True)
+class OrderConfig:
+    link_m: float = _param(0.008, "largest gap between consecutive seam points that is bridged")
+    min_branch_m: float = _param(0.015, "side branches shorter than this are noise and pruned")
+
+
+@dataclass(frozen=True)
+class SectionConfig:
+    half_width_m: float = _param(0.025, "cross-section half width (lateral reach from the seam)")
+    slab_m: float = _param(0.003, "cross-section thickness along the seam")
+    face_radius_m: float = _param(0.012, "how far beside the seam the faces are fitted (torch axis)")
+    groove_min_depth_m: float = _param(0.0015, "shallowest groove that counts")
+    fillet_min_leg_m: float = _param(0.012, "shortest face of a fillet (shorter: a plate edge on a table)")
+    min_valid_fraction: float = _param(0.5, "a seam whose sections fit its joint less often is rejected")
+    max_gap_m: float = _param(0.012, "a run of failed sections longer than this splits the seam")
+    max_extension_m: float = _param(0.3, "how far an open seam end may be extended section by section")
+
+
+@dataclass(frozen=True)
+class ResampleConfig:
+    spacing_m: float = _param(0.002, "pose spacing along the seam (arc length)")
+    smoothing_m: float = _param(0.003, "Gaussian sigma (arc length) that smooths seam points before resampling")
+
+
+@dataclass(frozen=True)
+class PlanConfig:
+    condition: ConditionConfig = field(default_factory=ConditionConfig)
+    smooth: SmoothConfig = field(default_factory=SmoothConfig)
+    normals: NormalsConfig = field(default_factory=NormalsConfig)
+    descriptor: DescriptorConfig = field(default_factory=DescriptorConfig)
+    segment: SegmentConfig = field(default_factory=SegmentConfig)
+    boundary: BoundaryConfig = field(default_factory=BoundaryConfig)
+    pairing: PairingConfig = field(default_factory=PairingConfig)
+    thinning: ThinningConfig = field(default_factory=ThinningConfig)
+    grid: GridConfig = field(default_factory=GridConfig)
+    order: OrderConfig = field(default_factory=OrderConfig)
+    section: SectionConfig = field(default_factory=SectionConfig)
+    resample: ResampleConfig = field(default_factory=ResampleConfig)
+
+
+def config_to_dict(config: PlanConfig) -> dict:
+    """Nested plain dict {section: {key: value}} (tuples as lists), for records and TOML."""
+    return {
+        f.name: {
+            key: list(value) if isinstance(value, tuple) else value
+            for key, value in dataclasses.asdict(getattr(config, f.name)).items()
+        }
+        for f in fields(config)
+    }
+
+
+def with_overrides(config: PlanConfig, overrides: dict[str, dict]) -> PlanConfig:
+    """A copy of `config` with `{section: {key: value}}` applied; unknown keys and wrong types
+    raise InputError naming `section.key`."""
+    sections = {f.name: f for f in fields(config)}
+    updated = {}
+    for section_name, values in overrides.items():
+        if section_name not in sections:
+            raise InputError(f"unknown config section {section_name!r} (known: {', '.join(sections)})")
+        section = getattr(config, section_name)
+        known = {f.name: f for f in fields(section)}
+        changes = {}
+        for key, value in values.items():
+            if key not in known:
+                raise InputError(f"unknown config key {section_name}.{key}")
+            changes[key] = _coerce(f"{section_name}.{key}", getattr(section, key), known[key], value)
+        updated[section_name] = dataclasses.replace(section, **changes)
+    return dataclasses.replace(config, **updated)
+
+
+def _coerce(name: str, current, spec: dataclasses.Field, value):
+    default = spec.default
+    sample = default if default is not None else current
+    if value is None:
+        if default is None:
+            return None
+        raise InputError(f"{name} cannot be empty")
+    if isinstance(sample, bool) or spec.type == "bool":
+        if isinstance(value, bool):
+            return value
+        raise InputError(f"{name} must be true or false, got {value!r}")
+    if "tuple" in str(spec.type):
+        if isinstance(value, (list, tuple)) and len(value) == 3:
+            try:
+                return tuple(float(v) for v in value)
+            except (TypeError, ValueError):
+                pass
+        raise InputError(f"{name} must be three numbers, got {value!r}")
+    if isinstance(sample, int) and "float" not in str(spec.type):
+        if isinstance(value, int) and not isinstance(value, bool):
+            return value
+        raise InputError(f"{name} must be an integer, got {value!r}")
+    if "float" in str(spec.type):
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            return float(value)
+        raise InputError(f"{name} must be a number, got {value!r}")
+    if isinstance(value, str):
+        return value
+    raise InputError(f"{name} must be text, got {value!r}")

@@ -1,0 +1,50 @@
+"""The point cloud gradient descriptor: large where the surface bends, ~0 on planes."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from weldseam.errors import InputError
+from weldseam.pipeline.neighbours import graph_pairs, neighbour_mean, neighbour_variance, radius_graph
+
+VARIANTS = ("released", "thesis")
+
+
+def gradient_descriptor(points: np.ndarray, normals: np.ndarray, *, radius_m: float, variant: str = "released") -> np.ndarray:
+    """Descriptor (N,) over the neighbours N(i) within `radius_m`.
+
+    released: V_i = var_j(n_i . n_j), D_i = var_{j in N(i)}(V_j).
+    thesis:   sigma_l(i) = var_j angle(n_i, n_j); sigma_g(i) = var_j angle(u_b, n_j) with u_b
+              the normalised sum of all normals; v_i = sqrt(sigma_l^2 + sigma_g^2);
+              D_i = var_{j in N(i)}(v_j).
+    """
+    if variant not in VARIANTS:
+        raise InputError(f"descriptor.variant must be one of {', '.join(VARIANTS)}, got {variant!r}")
+    graph = radius_graph(points, radius_m)
+    if variant == "released":
+        per_point = _normal_cosine_variance(graph, normals)
+    else:
+        rows, cols = graph_pairs(graph)
+        cosines = np.einsum("ij,ij->i", normals[rows], normals[cols])
+        theta = np.arccos(np.clip(cosines, -1.0, 1.0))
+        count = np.bincount(rows, minlength=len(points))
+        mean_theta = np.bincount(rows, theta, len(points)) / count
+        sigma_local = np.bincount(rows, theta**2, len(points)) / count - mean_theta**2
+        mean_normal = normals.sum(axis=0)
+        mean_normal /= np.linalg.norm(mean_normal) or 1.0
+        beta = np.arccos(np.clip(normals @ mean_normal, -1.0, 1.0))
+        sigma_global = neighbour_variance(graph, beta)
+        per_point = np.sqrt(np.maximum(sigma_local, 0.0) ** 2 + sigma_global**2)
+    return neighbour_variance(graph, per_point)
+
+
+def _normal_cosine_variance(graph, normals: np.ndarray) -> np.ndarray:
+    """var_j(n_i . n_j) = n_i^T (E[n n^T] - E[n] E[n]^T) n_i over each neighbourhood."""
+    x, y, z = normals.T
+    m = neighbour_mean(graph, np.column_stack([x, y, z, x * x, y * y, z * z, x * y, x * z, y * z]))
+    second = (
+        x * x * m[:, 3] + y * y * m[:, 4] + z * z * m[:, 5]
+        + 2 * (x * y * m[:, 6] + x * z * m[:, 7] + y * z * m[:, 8])
+    )
+    first = x * m[:, 0] + y * m[:, 1] + z * m[:, 2]
+    return np.maximum(second - first**2, 0.0)

@@ -1,0 +1,55 @@
+"""Fixed-radius neighbourhoods as sparse matrices, built once per cloud and reused."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import sparse
+from scipy.spatial import cKDTree
+
+
+def radius_graph(points: np.ndarray, radius_m: float) -> sparse.csr_matrix:
+    """Symmetric 0/1 matrix (N, N): entry (i, j) = 1 when |p_i - p_j| <= radius_m, self included."""
+    n = len(points)
+    pairs = cKDTree(points).query_pairs(radius_m, output_type="ndarray")
+    self_index = np.arange(n)
+    rows = np.concatenate([pairs[:, 0], pairs[:, 1], self_index])
+    cols = np.concatenate([pairs[:, 1], pairs[:, 0], self_index])
+    graph = sparse.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
+    graph.sort_indices()
+    return graph
+
+
+def neighbour_mean(graph: sparse.csr_matrix, values: np.ndarray) -> np.ndarray:
+    """Mean of `values` (N,) or (N, k) over each point's neighbourhood (rows of `graph`)."""
+    counts = np.asarray(graph.sum(axis=1)).ravel()
+    sums = graph @ values
+    return sums / (counts if sums.ndim == 1 else counts[:, None])
+
+
+def neighbour_variance(graph: sparse.csr_matrix, values: np.ndarray) -> np.ndarray:
+    """Variance of the scalar `values` (N,) over each neighbourhood: E[v^2] - E[v]^2."""
+    means = neighbour_mean(graph, np.column_stack([values, values * values]))
+    return np.maximum(means[:, 1] - means[:, 0] ** 2, 0.0)
+
+
+def graph_pairs(graph: sparse.csr_matrix) -> tuple[np.ndarray, np.ndarray]:
+    """(rows, cols) index arrays of the graph's entries, rows ascending."""
+    rows = np.repeat(np.arange(graph.shape[0]), np.diff(graph.indptr))
+    return rows, graph.indices
+
+
+def neighbour_covariance(points: np.ndarray, graph: sparse.csr_matrix) -> np.ndarray:
+    """Covariance (N, 3, 3) of each point's neighbours (rows of `graph`)."""
+    centred = points - points.mean(axis=0)
+    x, y, z = centred.T
+    moments = neighbour_mean(graph, np.column_stack([x, y, z, x * x, y * y, z * z, x * y, x * z, y * z]))
+    mean = moments[:, :3]
+    cov = np.empty((len(points), 3, 3))
+    for (a, b), column in zip(((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)), range(3, 9)):
+        cov[:, a, b] = cov[:, b, a] = moments[:, column] - mean[:, a] * mean[:, b]
+    return cov
+
+
+def principal_directions(points: np.ndarray, graph: sparse.csr_matrix) -> np.ndarray:
+    """Unit direction (N, 3) of largest spread of each point's neighbours (a line's tangent)."""
+    return np.linalg.eigh(neighbour_covariance(points, graph))[1][:, :, 2]

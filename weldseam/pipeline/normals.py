@@ -1,0 +1,27 @@
+"""Surface normals by PCA over a radius neighbourhood, oriented toward the camera."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import sparse
+
+from weldseam.pipeline.neighbours import neighbour_covariance, radius_graph
+
+
+def estimate_normals(
+    points: np.ndarray, *, radius_m: float, camera_origin_m: np.ndarray
+) -> np.ndarray:
+    """Unit normals (N, 3): eigenvector of the smallest eigenvalue of the covariance of the
+    neighbours within `radius_m`, flipped so that n . (C - p) >= 0 (C = camera origin)."""
+    return orient_toward(pca_normals(points, radius_graph(points, radius_m)), points, camera_origin_m)
+
+
+def pca_normals(points: np.ndarray, graph: sparse.csr_matrix) -> np.ndarray:
+    """Unoriented PCA normals (N, 3) over the neighbourhoods given by `graph`."""
+    return np.linalg.eigh(neighbour_covariance(points, graph))[1][:, :, 0]
+
+
+def orient_toward(normals: np.ndarray, points: np.ndarray, camera_origin_m: np.ndarray) -> np.ndarray:
+    """Flip each normal that points away from the camera origin."""
+    facing = np.einsum("ij,ij->i", normals, np.asarray(camera_origin_m) - points)
+    return np.where(facing[:, None] < 0, -normals, normals)

@@ -1,0 +1,56 @@
+"""Midpoint pairing: pair each band rim point with the rim point across the band."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from weldseam.pipeline.neighbours import principal_directions, radius_graph
+
+
+def rim_tangents(rim: np.ndarray, radius_m: float) -> np.ndarray:
+    """Unit edge tangents (N, 3): principal direction of the rim points within `radius_m`."""
+    return principal_directions(rim, radius_graph(rim, radius_m))
+
+
+def pair_midpoints(
+    rim: np.ndarray,
+    *,
+    tangent_radius_m: float,
+    angle_tolerance_deg: float,
+    max_width_m: float,
+    width_tolerance: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Midpoints (M, 3) and widths (M,) of rim pairs across the band.
+
+    The partner of rim point b is the nearest rim point q with (q - b) at 90 +- tolerance
+    degrees to b's edge tangent and |q - b| <= max_width_m. Pairs whose width differs from
+    the median width by more than width_tolerance (a fraction) are dropped: at the band's
+    end caps the rim turns and pairs there are short or long, which made the reference
+    implementation zig-zag.
+    """
+    if len(rim) < 4:
+        return np.empty((0, 3)), np.empty(0)
+    tangents = rim_tangents(rim, tangent_radius_m)
+    pairs = cKDTree(rim).query_pairs(max_width_m, output_type="ndarray")
+    rows = np.concatenate([pairs[:, 0], pairs[:, 1]])
+    cols = np.concatenate([pairs[:, 1], pairs[:, 0]])
+    delta = rim[cols] - rim[rows]
+    length = np.linalg.norm(delta, axis=1)
+    cosine = np.abs(np.einsum("ij,ij->i", delta, tangents[rows])) / np.maximum(length, 1e-12)
+    across = cosine <= np.sin(np.radians(angle_tolerance_deg))
+    # Also perpendicular to the partner's tangent, so both ends agree the pair spans the band.
+    across &= np.abs(np.einsum("ij,ij->i", delta, tangents[cols])) / np.maximum(length, 1e-12) <= np.sin(
+        np.radians(angle_tolerance_deg)
+    )
+    across &= length > 2 * tangent_radius_m
+    rows, cols, length = rows[across], cols[across], length[across]
+    if len(rows) == 0:
+        return np.empty((0, 3)), np.empty(0)
+    order = np.lexsort((length, rows))
+    first = order[np.r_[True, rows[order][1:] != rows[order][:-1]]]
+    rows, cols, length = rows[first], cols[first], length[first]
+    median = np.median(length)
+    consistent = np.abs(length - median) <= width_tolerance * median
+    rows, cols, length = rows[consistent], cols[consistent], length[consistent]
+    return (rim[rows] + rim[cols]) / 2, length

@@ -1,0 +1,58 @@
+"""Resampling: smooth the seam points along the seam and space poses evenly by arc length."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from weldseam.geometry import frames_from_axes, unit
+
+
+def resample_seam(
+    positions: np.ndarray, torch_axes: np.ndarray, *, spacing_m: float, smoothing_m: float, closed: bool
+) -> tuple[np.ndarray, np.ndarray]:
+    """Positions (K, 3) and tool frames (K, 3, 3) every `spacing_m` of arc length.
+
+    Positions and torch axes are first smoothed with a Gaussian of sigma `smoothing_m` in
+    arc length (per-section noise averages out; a 90-degree bend is rounded by about
+    sigma). Between knots, positions are interpolated linearly and torch axes by normalised
+    linear interpolation (slerp to 1e-4 rad for neighbouring axes within 10 degrees). Frame
+    y is the travel direction of the resampled line, z the torch axis, x = y cross z.
+    """
+    arc = _arc_lengths(positions, closed)
+    total = arc[-1]
+    if closed:
+        positions = np.vstack([positions, positions[:1]])
+        torch_axes = np.vstack([torch_axes, torch_axes[:1]])
+    positions, torch_axes = _smooth(positions, torch_axes, arc, smoothing_m, total if closed else None)
+    count = max(int(round(total / spacing_m)), 1)
+    samples = np.linspace(0.0, total, count, endpoint=closed) if closed else np.linspace(0.0, total, count + 1)
+    new_positions = np.column_stack([np.interp(samples, arc, positions[:, k]) for k in range(3)])
+    new_axes = unit(np.column_stack([np.interp(samples, arc, torch_axes[:, k]) for k in range(3)]))
+    if closed:
+        travel = np.roll(new_positions, -1, axis=0) - np.roll(new_positions, 1, axis=0)
+    else:
+        travel = np.gradient(new_positions, axis=0)
+    return new_positions, frames_from_axes(new_axes, travel)
+
+
+def _arc_lengths(positions: np.ndarray, closed: bool) -> np.ndarray:
+    points = np.vstack([positions, positions[:1]]) if closed else positions
+    return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
+
+
+def _smooth(positions, axes, arc, sigma_m, period):
+    """Gaussian-weighted means along arc length (circular distance when `period` is set).
+    Near an open end the window is one-sided, so the end point stays where it was measured."""
+    if sigma_m <= 0 or len(arc) < 3:
+        return positions, axes
+    distance = arc[:, None] - arc[None, :]
+    if period is not None:
+        distance = (distance + period / 2) % period - period / 2
+    weights = np.exp(-0.5 * (distance / sigma_m) ** 2)
+    if period is not None:
+        weights[:, -1] = 0.0  # the closing copy of the first point is not a second sample
+    else:
+        reach = np.minimum(arc, arc[-1] - arc)  # keep the window symmetric: no pull at the ends
+        weights *= np.abs(distance) <= np.maximum(reach, 1e-12)[:, None] + 1e-12
+    weights /= weights.sum(axis=1, keepdims=True)
+    return weights @ positions, unit(weights @ axes)

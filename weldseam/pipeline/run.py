@@ -1,0 +1,190 @@
+"""The pipeline: the only module that knows the order of the stages.
+
+Each stage is timed under its own name (the name of its module and config section); a
+stage that fails is reported with that name.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from contextlib import contextmanager
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from weldseam import __version__
+from weldseam.config import PlanConfig, config_to_dict
+from weldseam.errors import InputError, NoSeamError, StageError, WeldseamError
+from weldseam.geometry import unit
+from weldseam.pipeline.boundary import boundary_mask
+from weldseam.pipeline.condition import condition_points
+from weldseam.pipeline.descriptor import gradient_descriptor
+from weldseam.pipeline.grid import voxel_centroids
+from weldseam.pipeline.normals import estimate_normals
+from weldseam.pipeline.order import order_chains
+from weldseam.pipeline.pairing import pair_midpoints
+from weldseam.pipeline.resample import resample_seam
+from weldseam.pipeline.segment import automatic_threshold, cluster_candidates
+from weldseam.pipeline.smooth import smooth_points
+from weldseam.pipeline.thinning import thin_points
+from weldseam.pipeline.trace import TracedSeam, deduplicate, trace_chain
+from weldseam.types import RunResult, Scan, WeldPath
+
+STAGES = (
+    "condition", "smooth", "normals", "descriptor", "segment", "boundary",
+    "pairing", "thinning", "grid", "order", "section", "resample",
+)
+MIN_POINTS = 100
+
+Dump = Callable[[str, np.ndarray, np.ndarray | None], None]
+
+
+def plan_paths(
+    scan: Scan,
+    config: PlanConfig,
+    *,
+    dump: Dump | None = None,
+    on_stage: Callable[[str], None] | None = None,
+    allow_empty: bool = False,
+) -> RunResult:
+    """Run every stage on `scan` and return the welding paths with the run's record.
+
+    `dump(stage, points, values)` receives each stage's points (for --dump-stages);
+    `on_stage(name)` is called as each stage starts (for progress). Raises NoSeamError
+    when nothing is found, unless `allow_empty`.
+    """
+    timings: dict[str, float] = {name: 0.0 for name in STAGES}
+    warnings: list[str] = []
+
+    @contextmanager
+    def stage(name: str):
+        if on_stage:
+            on_stage(name)
+        start = time.perf_counter()
+        try:
+            yield
+        except WeldseamError:
+            raise
+        except Exception as error:  # a numerical failure inside a stage: name the stage
+            raise StageError(name, f"{type(error).__name__}: {error}") from error
+        finally:
+            timings[name] += time.perf_counter() - start
+
+    def emit(name: str, points: np.ndarray, values: np.ndarray | None = None) -> None:
+        if dump is not None:
+            dump(name, points, values)
+
+    camera = scan.camera_origin_m
+    if camera is None:
+        finite = scan.points_m[np.isfinite(scan.points_m).all(axis=1)]
+        camera = (finite.mean(axis=0) if len(finite) else np.zeros(3)) + np.array([0.0, 0.0, 1.0])
+        warnings.append("no camera origin given: normals oriented toward +z (a camera above the part)")
+
+    c = config
+    with stage("condition"):
+        fine = condition_points(
+            scan.points_m, voxel_m=c.condition.voxel_m, crop_min_m=c.condition.crop_min_m,
+            crop_max_m=c.condition.crop_max_m, outlier_neighbours=c.condition.outlier_neighbours,
+            outlier_std_ratio=c.condition.outlier_std_ratio,
+        )
+        if len(fine) < MIN_POINTS:
+            raise InputError(f"{scan.source}: only {len(fine)} valid points left after conditioning")
+        working = voxel_centroids(fine, c.condition.working_voxel_m)
+        fine_tree = cKDTree(fine)
+    emit("condition", fine)
+    with stage("smooth"):
+        if c.smooth.enabled:
+            working = smooth_points(working, radius_m=c.smooth.radius_m, range_sigma_m=c.smooth.range_sigma_m)
+    emit("smooth", working)
+    with stage("normals"):
+        normals = estimate_normals(working, radius_m=c.normals.radius_m, camera_origin_m=camera)
+    with stage("descriptor"):
+        descriptor = gradient_descriptor(
+            working, normals, radius_m=c.descriptor.radius_m, variant=c.descriptor.variant
+        )
+    emit("descriptor", working, descriptor)
+    with stage("segment"):
+        threshold = c.segment.threshold
+        if threshold is None:
+            threshold = automatic_threshold(
+                spacing_m=c.condition.working_voxel_m, normals_radius_m=c.normals.radius_m,
+                descriptor_radius_m=c.descriptor.radius_m, variant=c.descriptor.variant,
+                min_crease_deg=c.segment.min_crease_deg,
+            )
+        clusters = cluster_candidates(
+            working, descriptor > threshold,
+            tolerance_m=c.segment.cluster_tolerance_m, min_length_m=c.segment.min_seam_length_m,
+        )
+    emit("segment", working[np.concatenate(clusters)] if clusters else np.empty((0, 3)))
+
+    working_tree = cKDTree(working)
+    section_params = dict(
+        half_width_m=c.section.half_width_m, slab_m=c.section.slab_m, face_radius_m=c.section.face_radius_m,
+        groove_min_depth_m=c.section.groove_min_depth_m, fillet_min_leg_m=c.section.fillet_min_leg_m,
+    )
+    traced: list[TracedSeam] = []
+    for members in clusters:
+        band, band_normals = working[members], normals[members]
+        with stage("boundary"):
+            rim = band[boundary_mask(band, band_normals, radius_m=c.boundary.radius_m, shift_ratio=c.boundary.shift_ratio)]
+        emit("boundary", rim)
+        with stage("pairing"):
+            midpoints, _ = pair_midpoints(
+                rim, tangent_radius_m=c.boundary.radius_m, angle_tolerance_deg=c.pairing.angle_tolerance_deg,
+                max_width_m=c.pairing.max_width_m, width_tolerance=c.pairing.width_tolerance,
+            )
+            if len(midpoints) < 5:  # no rim pairs (a narrow band): thin the band itself
+                midpoints = band
+        emit("pairing", midpoints)
+        with stage("thinning"):
+            thinned = thin_points(midpoints, radius_m=c.thinning.radius_m, iterations=c.thinning.iterations)
+        emit("thinning", thinned)
+        with stage("grid"):
+            nodes = voxel_centroids(thinned, c.grid.leaf_m)
+        with stage("order"):
+            chains = order_chains(nodes, link_m=c.order.link_m, min_branch_m=c.order.min_branch_m)
+        with stage("section"):
+            for chain in chains:
+                approx_axes = _approximate_torch_axes(chain.points, working, normals, working_tree, c.section.face_radius_m)
+                traced += trace_chain(
+                    chain, approx_axes, fine, fine_tree,
+                    step_m=c.resample.spacing_m, max_gap_m=c.section.max_gap_m,
+                    min_valid_fraction=c.section.min_valid_fraction,
+                    max_extension_m=c.section.max_extension_m, section_params=section_params,
+                )
+    with stage("section"):
+        seams = deduplicate(traced, tolerance_m=c.section.slab_m, min_length_m=c.segment.min_seam_length_m)
+    paths = []
+    with stage("resample"):
+        for seam in seams:
+            positions, rotations = resample_seam(
+                seam.positions_m, seam.torch_axes, spacing_m=c.resample.spacing_m,
+                smoothing_m=c.resample.smoothing_m, closed=seam.closed,
+            )
+            paths.append(
+                WeldPath(
+                    seam_id=len(paths), positions_m=positions, rotations=rotations,
+                    closed=seam.closed, joint=seam.joint, confidence=seam.confidence,
+                )
+            )
+    if paths:
+        emit("path", np.vstack([p.positions_m for p in paths]))
+    if not paths and not allow_empty:
+        raise NoSeamError(f"{scan.source or 'scan'}: no weld seam found ({len(clusters)} candidate(s) rejected)")
+    record = {
+        "weldseam_version": __version__,
+        "input": {"path": scan.source, "sha256": scan.sha256, "points": int(len(scan.points_m))},
+        "camera_origin_m": [round(float(v), 9) for v in camera],
+        "threshold": float(threshold),
+        "params": config_to_dict(config),
+    }
+    return RunResult(paths=tuple(paths), record=record, timings_s=timings, warnings=tuple(warnings))
+
+
+def _approximate_torch_axes(centres, points, normals, tree, radius_m) -> np.ndarray:
+    """Negated mean normal of the surface within `radius_m` of each centre: the plate normal
+    beside a groove, the bisector of the faces at a corner; pointing into the work."""
+    neighbourhoods = tree.query_ball_point(centres, radius_m, workers=-1)
+    axes = np.array([-normals[members].sum(axis=0) if members else np.zeros(3) for members in neighbourhoods])
+    return unit(axes)

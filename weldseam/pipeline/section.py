@@ -1,0 +1,222 @@
+"""Cross-section analysis: classify the joint and locate the seam point and torch axis.
+
+At each point c of a coarse seam line, with travel direction t and approximate torch axis a
+(into the work), the fine points in a thin slab across the seam are projected onto the
+section plane: u = lateral offset along l = t x a, w = height out of the work (-a). The
+profile w(u) is fitted with two joint models:
+
+- V-groove: a reference line through the plate surface on both sides (an upper-envelope
+  robust fit), a depression below it at least `groove_min_depth_m` deep with surface on both
+  sides, and a line fitted to each groove wall. Each groove edge is where its wall line meets
+  the reference line (where a wall is hidden, the last surface point before the hole). The
+  seam point is the midpoint of the two edges on the reference line; the torch axis is
+  perpendicular to the reference line, fitted within `face_radius_m` beside the edges.
+- Fillet / inside corner: two lines meeting at a concave corner (included angle 45..135
+  degrees), each face at least `fillet_min_leg_m` long. The seam point is the corner; the
+  torch axis is the bisector of the two faces, pointing into the corner.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from weldseam.geometry import unit
+
+V_GROOVE = "v_groove"
+FILLET = "fillet"
+
+
+@dataclass(frozen=True)
+class SectionFit:
+    """One cross-section's result in 3D: joint kind ("v_groove", "fillet" or "" for no fit),
+    seam point (3,) in metres and unit torch axis (3,) into the work."""
+
+    joint: str
+    point_m: np.ndarray
+    torch_axis: np.ndarray
+
+
+@dataclass(frozen=True)
+class _ProfileFit:
+    joint: str
+    u: float
+    w: float
+    axis_u: float
+    axis_w: float
+
+
+def section_frames(centres: np.ndarray, axes: np.ndarray, closed: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Travel t (K, 3), torch axis a made perpendicular to t, and lateral l = t x a."""
+    if closed:
+        travel = np.roll(centres, -1, axis=0) - np.roll(centres, 1, axis=0)
+    else:
+        travel = np.gradient(centres, axis=0) if len(centres) > 1 else np.zeros_like(centres)
+    travel = unit(travel)
+    axes = unit(axes - np.sum(axes * travel, axis=1, keepdims=True) * travel)
+    return travel, axes, np.cross(travel, axes)
+
+
+def analyse_sections(
+    points: np.ndarray,
+    tree,
+    centres: np.ndarray,
+    travel: np.ndarray,
+    axes: np.ndarray,
+    lateral: np.ndarray,
+    *,
+    half_width_m: float,
+    slab_m: float,
+    face_radius_m: float,
+    groove_min_depth_m: float,
+    fillet_min_leg_m: float,
+) -> list[SectionFit]:
+    """Fit every cross-section; `tree` is a cKDTree over the fine `points` (N, 3)."""
+    neighbourhoods = tree.query_ball_point(centres, np.sqrt(2) * half_width_m, workers=-1, return_sorted=True)
+    fits = []
+    for centre, t, a, l, members in zip(centres, travel, axes, lateral, neighbourhoods):
+        offsets = points[members] - centre
+        along, u, w = offsets @ t, offsets @ l, -(offsets @ a)
+        keep = (np.abs(along) <= slab_m / 2) & (np.abs(u) <= half_width_m) & (np.abs(w) <= half_width_m)
+        profile = fit_profile(
+            u[keep], w[keep],
+            face_radius_m=face_radius_m, groove_min_depth_m=groove_min_depth_m, fillet_min_leg_m=fillet_min_leg_m,
+        )
+        if profile is None:
+            fits.append(SectionFit("", centre, a))
+            continue
+        point = centre + profile.u * l - profile.w * a
+        axis = unit(profile.axis_u * l - profile.axis_w * a)
+        fits.append(SectionFit(profile.joint, point, axis))
+    return fits
+
+
+def fit_profile(
+    u: np.ndarray, w: np.ndarray, *, face_radius_m: float, groove_min_depth_m: float, fillet_min_leg_m: float
+) -> _ProfileFit | None:
+    """The joint in one 2D profile (u lateral, w height out of the work), or None."""
+    if len(u) < 12:
+        return None
+    order = np.argsort(u, kind="stable")
+    u, w = u[order], w[order]
+    return _fit_groove(u, w, face_radius_m, groove_min_depth_m) or _fit_fillet(u, w, fillet_min_leg_m)
+
+
+def _line(u: np.ndarray, w: np.ndarray, weights: np.ndarray | None = None) -> tuple[float, float]:
+    """Weighted least-squares line w = intercept + slope * u."""
+    weights = np.ones_like(u) if weights is None else weights
+    design = np.column_stack([np.ones_like(u), u]) * np.sqrt(weights)[:, None]
+    (intercept, slope), *_ = np.linalg.lstsq(design, w * np.sqrt(weights), rcond=None)
+    return float(intercept), float(slope)
+
+
+def _noise(residuals: np.ndarray) -> float:
+    return 1.4826 * float(np.median(np.abs(residuals - np.median(residuals)))) + 1e-5
+
+
+def _fit_groove(u: np.ndarray, w: np.ndarray, face_radius_m: float, min_depth_m: float) -> _ProfileFit | None:
+    half_width = max(abs(u[0]), abs(u[-1]))
+    # Upper envelope: start from the outer halves, then repeatedly ignore points below the line.
+    on_surface = np.abs(u) > half_width / 2
+    if on_surface.sum() < 6:
+        return None
+    for _ in range(6):
+        intercept, slope = _line(u[on_surface], w[on_surface])
+        residual = w - (intercept + slope * u)
+        sigma = _noise(residual[on_surface])
+        depth_limit = max(3 * sigma, 0.4 * min_depth_m)
+        updated = (residual > -depth_limit) & (residual < 4 * sigma + depth_limit)
+        if updated.sum() < 6 or np.array_equal(updated, on_surface):
+            break
+        on_surface = updated
+    depth = -residual
+    deep = np.flatnonzero(depth > depth_limit)
+    if len(deep) < 4:
+        return None
+    # The depression: the largest run of deep points with gaps under 4 mm between them.
+    runs = np.split(deep, np.flatnonzero(np.diff(u[deep]) > 0.004) + 1)
+    groove = max(runs, key=len)
+    u_start, u_end = u[groove[0]], u[groove[-1]]
+    left_surface = on_surface & (u < u_start)
+    right_surface = on_surface & (u > u_end)
+    if left_surface.sum() < 4 or right_surface.sum() < 4:
+        return None
+    if np.percentile(depth[groove], 90) < min_depth_m:
+        return None
+    u_left = _groove_edge(u, depth, groove, u[left_surface].max(), u_start, side=-1)
+    u_right = _groove_edge(u, depth, groove, u[right_surface].min(), u_end, side=+1)
+    # The surface beside the seam, within face_radius of each edge, sets the torch axis.
+    beside = on_surface & (
+        ((u >= u_left - face_radius_m) & (u <= u_left)) | ((u >= u_right) & (u <= u_right + face_radius_m))
+    )
+    if beside.sum() >= 6:
+        intercept, slope = _line(u[beside], w[beside])
+    centre_u = (u_left + u_right) / 2
+    norm = np.hypot(1.0, slope)
+    return _ProfileFit(V_GROOVE, centre_u, intercept + slope * centre_u, slope / norm, -1.0 / norm)
+
+
+def _groove_edge(u, depth, groove, surface_end, groove_end, side: int) -> float:
+    """Where the wall on one side of the groove meets the surface (depth 0).
+
+    The wall is the deep points in the outer half of the depression on that side; a line
+    depth = c + m u through them is solved for depth 0. Where the wall is hidden or too
+    short, the edge is taken halfway between the last surface point and the first deep one.
+    """
+    fallback = (surface_end + groove_end) / 2
+    deepest = np.percentile(depth[groove], 90)
+    middle = (u[groove[0]] + u[groove[-1]]) / 2
+    wall = groove[(depth[groove] < 0.8 * deepest) & ((u[groove] - middle) * side > 0)]
+    if len(wall) < 5 or np.ptp(u[wall]) < 0.001:
+        return fallback
+    c, m = _line(u[wall], depth[wall])
+    if m * side >= -0.2:  # depth must grow toward the middle, at least 11 degrees steep
+        return fallback
+    edge = -c / m
+    low, high = sorted((surface_end, groove_end))
+    return float(edge) if low - 0.002 <= edge <= high + 0.002 else fallback
+
+
+def _fit_fillet(u: np.ndarray, w: np.ndarray, min_leg_m: float) -> _ProfileFit | None:
+    """Two lines, left and right of a break; the break minimising the total squared error."""
+    n = len(u)
+    sums = [np.concatenate([[0.0], np.cumsum(v)]) for v in (np.ones(n), u, w, u * u, u * w, w * w)]
+    splits = np.arange(5, n - 4)
+    if len(splits) == 0:
+        return None
+    left = [s[splits] for s in sums]
+    right = [s[-1] - s[splits] for s in sums]
+    error = _segment_error(*left) + _segment_error(*right)
+    split = int(splits[np.argmin(error)])
+    fits = []
+    for part in (slice(0, split), slice(split, n)):
+        pu, pw = u[part], w[part]
+        intercept, slope = _line(pu, pw)
+        residual = pw - (intercept + slope * pu)
+        inliers = np.abs(residual) <= max(3 * _noise(residual), 0.0005)
+        if inliers.mean() < 0.8 or inliers.sum() < 5:
+            return None
+        fits.append((*_line(pu[inliers], pw[inliers]), pu[inliers]))
+    (a1, b1, u1), (a2, b2, u2) = fits
+    if not (b1 < 0 < b2):  # concave: both faces rise away from the corner
+        return None
+    corner_u = (a2 - a1) / (b1 - b2)
+    corner_w = a1 + b1 * corner_u
+    to_left = unit(np.array([-1.0, -b1]))
+    to_right = unit(np.array([1.0, b2]))
+    included = np.degrees(np.arccos(np.clip(to_left @ to_right, -1.0, 1.0)))
+    leg_left = (corner_u - u1.min()) * np.hypot(1.0, b1)
+    leg_right = (u2.max() - corner_u) * np.hypot(1.0, b2)
+    if not (45.0 <= included <= 135.0) or min(leg_left, leg_right) < min_leg_m:
+        return None
+    axis = -unit(to_left + to_right)
+    return _ProfileFit(FILLET, float(corner_u), float(corner_w), float(axis[0]), float(axis[1]))
+
+
+def _segment_error(count, su, sw, suu, suw, sww):
+    """Residual sum of squares of the least-squares line through a segment, from its sums."""
+    var_u = suu - su * su / count
+    cov = suw - su * sw / count
+    var_w = sww - sw * sw / count
+    return var_w - np.divide(cov * cov, var_u, out=np.zeros_like(cov), where=var_u > 1e-12)
