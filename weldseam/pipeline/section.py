@@ -162,9 +162,10 @@ def _groove_edge(u, depth, groove, surface_end, groove_end, side: int) -> float:
 
     The wall is the deep points in the outer half of the depression on that side; a line
     depth = c + m u through them is solved for depth 0. Where the wall is hidden or too
-    short, the edge is taken halfway between the last surface point and the first deep one.
+    short, the edge is the last surface point: a wall is hidden when it faces away from the
+    camera, and then the surface beside it is seen right up to the edge.
     """
-    fallback = (surface_end + groove_end) / 2
+    fallback = surface_end
     deepest = np.percentile(depth[groove], 90)
     middle = (u[groove[0]] + u[groove[-1]]) / 2
     wall = groove[(depth[groove] < 0.8 * deepest) & ((u[groove] - middle) * side > 0)]

@@ -1,0 +1,74 @@
+import numpy as np
+import pytest
+
+from tests.conftest import fillet_cloud, rotation_about, v_groove_cloud
+from weldseam.config import PlanConfig
+from weldseam.errors import NoSeamError
+from weldseam.pipeline.run import STAGES, plan_paths
+from weldseam.types import Scan
+
+CONFIG = PlanConfig()
+
+
+def plan(points, camera):
+    return plan_paths(Scan(points_m=points, camera_origin_m=np.asarray(camera, float), source="test"), CONFIG)
+
+
+def test_v_groove_path_lies_on_the_groove_centre_and_points_into_the_plate(rng):
+    result = plan(v_groove_cloud(rng), [0.0, 0.05, 0.45])
+    assert len(result.paths) == 1
+    path = result.paths[0]
+    assert path.joint == "v_groove" and not path.closed
+    lateral = np.hypot(path.positions_m[:, 1], path.positions_m[:, 2] - 0.010)
+    assert lateral.mean() < 0.0003 and lateral.max() < 0.001
+    assert path.length_m > 0.22  # the groove is 0.24 m long: ends reached, no end caps
+    torch = path.rotations[:, :, 2]
+    assert np.degrees(np.arccos(-torch[:, 2])).max() < 2.0
+    travel = path.rotations[:, :, 1]
+    assert np.all(np.abs(travel[:, 0]) > 0.99)
+    assert set(result.timings_s) == set(STAGES)
+
+
+def test_fillet_path_is_the_inside_corner_with_the_bisector_axis(rng):
+    result = plan(fillet_cloud(rng), [0.0, 0.3, 0.3])
+    assert [p.joint for p in result.paths] == ["fillet"]
+    path = result.paths[0]
+    corner_error = np.hypot(path.positions_m[:, 1], path.positions_m[:, 2])
+    assert corner_error.mean() < 0.0005
+    assert path.length_m > 0.18
+    bisector = np.array([0.0, -1.0, -1.0]) / np.sqrt(2)
+    angles = np.degrees(np.arccos(np.clip(path.rotations[:, :, 2] @ bisector, -1, 1)))
+    assert angles.mean() < 3.0
+
+
+def test_a_flat_plate_has_no_seam(rng):
+    grid = np.stack(np.meshgrid(np.arange(0, 0.2, 0.0007), np.arange(0, 0.15, 0.0007)), -1).reshape(-1, 2)
+    points = np.column_stack([grid, rng.normal(0, 0.0003, len(grid))])
+    with pytest.raises(NoSeamError, match="no weld seam"):
+        plan(points, [0.1, 0.07, 0.45])
+    result = plan_paths(Scan(points_m=points, camera_origin_m=np.array([0.1, 0.07, 0.45])), CONFIG, allow_empty=True)
+    assert result.paths == ()
+
+
+def test_a_rigidly_moved_scan_gives_the_same_path_moved(rng):
+    points = v_groove_cloud(rng)
+    camera = np.array([0.0, 0.05, 0.45])
+    rotation, shift = rotation_about([0.3, -0.2, 1.0], 0.9), np.array([0.4, -0.2, 0.1])
+    original = plan(points, camera).paths[0]
+    moved = plan(points @ rotation.T + shift, rotation @ camera + shift).paths[0]
+    expected = original.positions_m @ rotation.T + shift
+    # Compare as curves: each moved pose lies on the moved original path.
+    from scipy.spatial import cKDTree
+
+    distance, nearest = cKDTree(expected).query(moved.positions_m)
+    assert np.median(distance) < 0.0005  # two noisy estimates, each within ~0.3 mm
+    axes = np.einsum("ij,kj->ki", rotation, original.rotations[:, :, 2])[nearest]
+    assert np.median(np.degrees(np.arccos(np.clip(np.sum(axes * moved.rotations[:, :, 2], 1), -1, 1)))) < 1.0
+
+
+def test_same_input_gives_identical_paths(rng):
+    points = v_groove_cloud(rng)
+    first, second = plan(points, [0, 0.05, 0.45]), plan(points.copy(), [0, 0.05, 0.45])
+    assert len(first.paths) == len(second.paths)
+    for a, b in zip(first.paths, second.paths):
+        assert np.array_equal(a.positions_m, b.positions_m) and np.array_equal(a.rotations, b.rotations)

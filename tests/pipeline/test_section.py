@@ -1,0 +1,52 @@
+import numpy as np
+
+from weldseam.pipeline.section import FILLET, V_GROOVE, fit_profile
+
+PARAMS = dict(face_radius_m=0.012, groove_min_depth_m=0.0015, fillet_min_leg_m=0.012)
+
+
+def profile(w_of_u, rng, noise=0.0003, half_width=0.025, pitch=0.0004, tilt_rad=0.0):
+    u = np.arange(-half_width, half_width, pitch)
+    w = w_of_u(u) + rng.normal(0, noise, len(u))
+    c, s = np.cos(tilt_rad), np.sin(tilt_rad)
+    return c * u - s * w, s * u + c * w
+
+
+def v_groove(centre, half_open=0.008, depth=0.010):
+    return lambda u: -np.clip((half_open - np.abs(u - centre)) * depth / half_open, 0, None)
+
+
+def test_groove_centre_is_the_middle_of_the_opening(rng):
+    u, w = profile(v_groove(0.004), rng)
+    fit = fit_profile(u, w, **PARAMS)
+    assert fit.joint == V_GROOVE
+    assert abs(fit.u - 0.004) < 0.0003 and abs(fit.w) < 0.0003
+    assert abs(fit.axis_u) < 0.05 and fit.axis_w < -0.99  # perpendicular to the plate, into it
+
+
+def test_groove_torch_axis_follows_a_tilted_plate(rng):
+    u, w = profile(v_groove(0.0), rng, tilt_rad=np.radians(10))
+    fit = fit_profile(u, w, **PARAMS)
+    angle = np.degrees(np.arctan2(fit.axis_u, -fit.axis_w))
+    assert fit.joint == V_GROOVE and abs(angle - 10) < 1.5
+
+
+def test_groove_with_one_hidden_wall_is_still_centred(rng):
+    u, w = profile(v_groove(0.0), rng)
+    hidden = (u > 0) & (u < 0.008)  # the right wall is not seen
+    fit = fit_profile(u[~hidden], w[~hidden], **PARAMS)
+    assert fit.joint == V_GROOVE and abs(fit.u) < 0.0006
+
+
+def test_fillet_corner_and_bisector(rng):
+    u, w = profile(lambda u: np.abs(u - 0.002), rng)  # 90-degree corner at u = 2 mm
+    fit = fit_profile(u, w, **PARAMS)
+    assert fit.joint == FILLET
+    assert abs(fit.u - 0.002) < 0.0005 and abs(fit.w) < 0.0005
+    assert abs(fit.axis_u) < 0.05 and fit.axis_w < -0.99
+
+
+def test_a_step_a_convex_edge_and_a_plane_are_not_seams(rng):
+    for shape in (lambda u: np.where(u > 0, 0.008, 0.0), lambda u: -np.abs(u), lambda u: 0 * u):
+        u, w = profile(shape, rng)
+        assert fit_profile(u, w, **PARAMS) is None
