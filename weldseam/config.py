@@ -88,7 +88,7 @@ class OrderConfig:
 
 @dataclass(frozen=True)
 class SectionConfig:
-    half_width_m: float = _param(0.025, "cross-section half width (lateral reach from the seam)")
+    half_width_m: float = _param(0.025, "cross-section reach from the seam (radius of the window)")
     slab_m: float = _param(0.003, "cross-section thickness along the seam")
     face_radius_m: float = _param(0.012, "how far beside the seam the faces are fitted (torch axis)")
     groove_min_depth_m: float = _param(0.0015, "shallowest groove that counts")

@@ -73,7 +73,7 @@ def analyse_sections(
     fillet_min_leg_m: float,
 ) -> list[SectionFit]:
     """Fit every cross-section; `tree` is a cKDTree over the fine `points` (N, 3)."""
-    neighbourhoods = tree.query_ball_point(centres, np.sqrt(2) * half_width_m, workers=-1, return_sorted=True)
+    neighbourhoods = tree.query_ball_point(centres, half_width_m, workers=-1, return_sorted=True)
     fits = []
     for centre, t, a, l, members in zip(centres, travel, axes, lateral, neighbourhoods):
         offsets = points[members] - centre

@@ -20,6 +20,9 @@ from weldseam.pipeline.order import Chain
 from weldseam.pipeline.section import SectionFit, analyse_sections, section_frames
 
 
+PROBE_SECTIONS = 5
+
+
 @dataclass(frozen=True)
 class TracedSeam:
     """Seam points (K, 3) and torch axes (K, 3) in travel order."""
@@ -43,8 +46,16 @@ def trace_chain(
     max_extension_m: float,
     section_params: dict,
 ) -> list[TracedSeam]:
-    """Seams found along one chain (none if the chain is not a seam)."""
+    """Seams found along one chain (none if the chain is not a seam).
+
+    A few evenly spaced sections are fitted first; when none of them fits a joint the
+    chain is rejected without fitting the rest (most candidates are plate or table edges).
+    """
     travel, axes, lateral = section_frames(chain.points, approx_axes, chain.closed)
+    probes = np.unique(np.linspace(0, len(chain.points) - 1, PROBE_SECTIONS).round().astype(int))
+    probe_fits = analyse_sections(points, tree, chain.points[probes], travel[probes], axes[probes], lateral[probes], **section_params)
+    if not any(fit.joint for fit in probe_fits):
+        return []
     fits = analyse_sections(points, tree, chain.points, travel, axes, lateral, **section_params)
     kinds = Counter(fit.joint for fit in fits if fit.joint)
     if not kinds:
@@ -53,7 +64,7 @@ def trace_chain(
     confidence = count / len(fits)
     if confidence < min_valid_fraction:
         return []
-    valid = np.array([fit.joint == joint for fit in fits])
+    valid = np.array([fit.joint == joint for fit in fits]) & _consistent([fit.point_m for fit in fits], step_m)
     seams = []
     for run, closed in _valid_runs(chain.points, valid, chain.closed, max_gap_m):
         run_fits = [fits[i] for i in run]
@@ -69,6 +80,18 @@ def trace_chain(
             )
         )
     return seams
+
+
+def _consistent(seam_points: list[np.ndarray], step_m: float) -> np.ndarray:
+    """False for seam points that jump off the line of their neighbours: farther than
+    max(1 mm, 2 steps) from the median of the 5 sections around them."""
+    positions = np.asarray(seam_points)
+    if len(positions) < 5:
+        return np.ones(len(positions), bool)
+    padded = np.pad(positions, ((2, 2), (0, 0)), mode="edge")
+    windows = np.stack([padded[k : k + len(positions)] for k in range(5)], axis=1)
+    deviation = np.linalg.norm(positions - np.median(windows, axis=1), axis=1)
+    return deviation <= max(0.001, 2 * step_m)
 
 
 def _valid_runs(centres: np.ndarray, valid: np.ndarray, closed: bool, max_gap_m: float):
