@@ -1,0 +1,32 @@
+# Two entry points on a fresh Debian 12 machine with Python 3.11:
+#   make demo   set up .venv and plan the bundled sample, printing the path
+#   make test   set up .venv and run the whole test suite
+PYTHON ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+
+.PHONY: setup demo test samples bench
+
+setup: $(VENV)/.installed
+
+# open3d's wheel links libusb-1.0, which a bare Debian lacks.
+$(VENV)/.installed: pyproject.toml
+	@dpkg -s libusb-1.0-0 >/dev/null 2>&1 || { $(SUDO) apt-get update -qq && $(SUDO) apt-get install -y -qq libusb-1.0-0; }
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install -q --upgrade pip
+	$(BIN)/python -m pip install -q -e ".[test]"
+	touch $@
+
+demo: setup
+	$(BIN)/weldseam plan samples/v_butt.ply --camera-pose samples/v_butt.pose.json -o - --format csv
+
+test: setup
+	$(BIN)/python -m pytest -q
+
+samples: setup
+	$(BIN)/python samples/make_samples.py
+
+bench: setup
+	$(BIN)/python benchmarks/speed.py
+	$(BIN)/python benchmarks/accuracy.py

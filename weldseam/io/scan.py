@@ -1,0 +1,93 @@
+"""Load a scan from any supported input into the base frame, with its camera origin."""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+import numpy as np
+
+from weldseam.errors import InputError
+from weldseam.geometry import transform_points
+from weldseam.io.clouds import read_cloud
+from weldseam.io.depth import backproject_depth, read_depth_png, read_intrinsics
+from weldseam.io.poses import read_camera_pose
+from weldseam.types import Scan
+
+UNIT_SCALE = {"m": 1.0, "mm": 0.001}
+LARGEST_PLAUSIBLE_EXTENT_M = 10.0
+SMALLEST_PLAUSIBLE_EXTENT_M = 0.01
+
+
+def load_scan(
+    source: str,
+    *,
+    intrinsics_path: str | None = None,
+    camera_pose_path: str | None = None,
+    cloud_frame: str = "base",
+    camera_origin_m: np.ndarray | None = None,
+    units: str = "m",
+    stdin=None,
+) -> tuple[Scan, list[str]]:
+    """Read `source` (cloud file, `-` for a PLY on stdin, or a 16-bit depth PNG with
+    `intrinsics_path`) and return it in the base frame with any notes for the user.
+
+    A depth image, and a cloud with `cloud_frame="camera"`, are in the camera frame and are
+    mapped to the base frame by the `T_base_camera` of `camera_pose_path` (identity when
+    absent). The camera origin (to orient normals) is `camera_origin_m` if given, else the
+    pose's translation, else the camera frame's origin for camera-frame data, else unknown.
+    """
+    notes: list[str] = []
+    if units not in UNIT_SCALE:
+        raise InputError(f"--units must be m or mm, got {units!r}")
+    if cloud_frame not in ("base", "camera"):
+        raise InputError(f"--cloud-frame must be base or camera, got {cloud_frame!r}")
+    pose = read_camera_pose(camera_pose_path) if camera_pose_path else None
+    is_depth = source != "-" and Path(source).suffix.lower() == ".png"
+    if is_depth:
+        if intrinsics_path is None:
+            raise InputError(f"{source}: a depth image needs --intrinsics FILE.json")
+        intrinsics = read_intrinsics(intrinsics_path)
+        depth = read_depth_png(source)
+        if depth.shape != (intrinsics.height, intrinsics.width):
+            raise InputError(
+                f"{source}: image is {depth.shape[1]}x{depth.shape[0]} but {intrinsics_path} says "
+                f"{intrinsics.width}x{intrinsics.height}"
+            )
+        points = backproject_depth(depth, intrinsics)
+        if len(points) == 0:
+            raise InputError(f"{source}: the depth image has no valid (non-zero) pixels")
+        sha256 = hashlib.sha256(Path(source).read_bytes()).hexdigest()
+        in_camera_frame = True
+    else:
+        if intrinsics_path is not None:
+            raise InputError(f"{source}: --intrinsics applies to depth images (.png) only")
+        points, sha256 = read_cloud(source, stdin=stdin)
+        points = points * UNIT_SCALE[units]
+        _check_units(source, points, units)
+        in_camera_frame = cloud_frame == "camera"
+    if in_camera_frame and pose is not None:
+        points = transform_points(pose, points)
+    if camera_origin_m is not None:
+        origin = np.asarray(camera_origin_m, dtype=np.float64)
+    elif pose is not None:
+        origin = pose[:3, 3].copy()
+    elif in_camera_frame:
+        origin = np.zeros(3)
+        notes.append(f"{source}: no --camera-pose: the base frame is the camera frame")
+    else:
+        origin = None
+    return Scan(points_m=points, camera_origin_m=origin, source=source, sha256=sha256), notes
+
+
+def _check_units(source: str, points: np.ndarray, units: str) -> None:
+    finite = points[np.isfinite(points).all(axis=1)]
+    if len(finite) < 2:
+        return
+    extent = float(np.linalg.norm(finite.max(axis=0) - finite.min(axis=0)))
+    if extent > LARGEST_PLAUSIBLE_EXTENT_M:
+        hint = "it looks like millimetres: pass --units mm" if units == "m" else "check the file's units"
+        raise InputError(f"{source}: the cloud spans {extent:.4g} m, too large for a workpiece scan; {hint}")
+    if extent < SMALLEST_PLAUSIBLE_EXTENT_M:
+        hint = "it looks like metres: drop --units mm" if units == "mm" else "check the file's units"
+        raise InputError(f"{source}: the cloud spans only {extent * 1000:.4g} mm, too small for a workpiece scan; {hint}")
