@@ -1,0 +1,183 @@
+"""The real `weldseam` command, run as a user would: exit codes, stdout, stderr, files."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from tests.conftest import v_groove_cloud
+from weldseam.io.clouds import write_ply
+
+CAMERA = "0,0.05,0.45"
+
+
+def weldseam(*args, stdin: bytes | None = None):
+    return subprocess.run(
+        [sys.executable, "-m", "weldseam.cli", *map(str, args)], input=stdin, capture_output=True, timeout=120
+    )
+
+
+@pytest.fixture(scope="module")
+def groove_ply(tmp_path_factory):
+    path = tmp_path_factory.mktemp("scan") / "groove.ply"
+    write_ply(path, v_groove_cloud(np.random.default_rng(7)))
+    return path
+
+
+def one_error_line(result, *fragments):
+    lines = result.stderr.decode().strip().splitlines()
+    assert len(lines) == 1, lines
+    assert lines[0].startswith("Error: ")
+    for fragment in fragments:
+        assert fragment in lines[0]
+    return lines[0]
+
+
+def test_plan_writes_a_json_path_on_the_groove(groove_ply, tmp_path):
+    out = tmp_path / "path.json"
+    result = weldseam("plan", groove_ply, "--camera-origin", CAMERA, "-o", out)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout == b""  # data only when asked for on stdout
+    assert "1 seam(s)" in result.stderr.decode()
+    data = json.loads(out.read_text())
+    assert data["frame"] == "base" and data["units"] == "m"
+    assert data["input"]["sha256"] and data["input"]["points"] > 50000
+    assert data["params"]["normals"]["radius_m"] == 0.01
+    (seam,) = data["seams"]
+    poses = np.array([[p["x"], p["y"], p["z"]] for p in seam["poses"]])
+    assert np.abs(poses[:, 1]).mean() < 0.0005 and np.abs(poses[:, 2] - 0.010).mean() < 0.0005
+
+
+def test_csv_on_stdout_from_a_ply_on_stdin_is_deterministic(groove_ply):
+    first = weldseam("plan", "-", "--camera-origin", CAMERA, "-q", stdin=groove_ply.read_bytes())
+    second = weldseam("plan", groove_ply, "--camera-origin", CAMERA, "-o", "-", "--format", "csv", "-q")
+    assert first.returncode == 0 and second.returncode == 0
+    assert first.stderr == b""
+    lines = first.stdout.decode().splitlines()
+    assert lines[0] == "seam,x,y,z,rx,ry,rz" and len(lines) > 100
+    assert first.stdout == second.stdout
+
+
+def test_json_output_is_byte_identical_apart_from_timings(groove_ply, tmp_path):
+    outputs = []
+    for name in ("a.json", "b.json"):
+        assert weldseam("plan", groove_ply, "--camera-origin", CAMERA, "-o", tmp_path / name).returncode == 0
+        data = json.loads((tmp_path / name).read_text())
+        data.pop("timings_s")
+        outputs.append(json.dumps(data))
+    assert outputs[0] == outputs[1]
+
+
+def test_dump_stages_writes_each_stage_as_ply(groove_ply, tmp_path):
+    result = weldseam("plan", groove_ply, "--camera-origin", CAMERA, "-o", tmp_path / "p.csv", "--dump-stages", tmp_path / "dump")
+    assert result.returncode == 0
+    names = sorted(p.name for p in (tmp_path / "dump").iterdir())
+    assert names[0] == "00_condition.ply" and any("descriptor" in n for n in names) and names[-1].endswith("_path.ply")
+
+
+def test_a_flat_plate_exits_3_and_writes_nothing_unless_allowed(tmp_path):
+    rng = np.random.default_rng(3)
+    grid = np.stack(np.meshgrid(np.arange(0, 0.2, 0.0008), np.arange(0, 0.15, 0.0008)), -1).reshape(-1, 2)
+    plate = tmp_path / "plate.npy"
+    np.save(plate, np.column_stack([grid, rng.normal(0, 0.0003, len(grid))]))
+    out = tmp_path / "path.csv"
+    result = weldseam("plan", plate, "--camera-origin", "0.1,0.07,0.45", "-o", out)
+    assert result.returncode == 3
+    one_error_line(result, "no weld seam found", "plate.npy")
+    assert not out.exists()
+    allowed = weldseam("plan", plate, "--camera-origin", "0.1,0.07,0.45", "-o", out, "--allow-empty")
+    assert allowed.returncode == 0 and out.read_text() == "seam,x,y,z,rx,ry,rz\n"
+
+
+def _truncated_ply(tmp_path, groove_ply):
+    path = tmp_path / "cut.ply"
+    path.write_bytes(groove_ply.read_bytes()[:5000])
+    return path
+
+
+def _empty_ply(tmp_path, _):
+    path = tmp_path / "empty.ply"
+    path.write_bytes(b"ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\nend_header\n")
+    return path
+
+
+def _nan_cloud(tmp_path, _):
+    path = tmp_path / "nan.npy"
+    np.save(path, np.full((100, 3), np.nan))
+    return path
+
+
+def _mm_cloud(tmp_path, groove_ply):
+    path = tmp_path / "mm.npy"
+    np.save(path, v_groove_cloud(np.random.default_rng(1)) * 1000.0)
+    return path
+
+
+@pytest.mark.parametrize(
+    "make, extra, fragments",
+    [
+        (lambda tmp, _: tmp / "missing.ply", [], ["missing.ply", "no such file"]),
+        (_truncated_ply, [], ["cut.ply"]),
+        (_empty_ply, [], ["empty.ply", "no points"]),
+        (_nan_cloud, [], ["nan.npy", "NaN"]),
+        (_mm_cloud, [], ["mm.npy", "--units mm"]),
+    ],
+)
+def test_bad_clouds_exit_2_with_one_line_and_no_output(groove_ply, tmp_path, make, extra, fragments):
+    scan = make(tmp_path, groove_ply)
+    out = tmp_path / "out.json"
+    result = weldseam("plan", scan, "--camera-origin", CAMERA, "-o", out, *extra)
+    assert result.returncode == 2
+    one_error_line(result, *fragments)
+    assert not out.exists()
+
+
+def test_a_millimetre_cloud_plans_with_units_mm(tmp_path):
+    path = tmp_path / "mm.npy"
+    np.save(path, v_groove_cloud(np.random.default_rng(1)) * 1000.0)
+    result = weldseam("plan", path, "--units", "mm", "--camera-origin", CAMERA, "-o", tmp_path / "p.csv")
+    assert result.returncode == 0, result.stderr
+
+
+@pytest.fixture
+def depth_png(tmp_path):
+    path = tmp_path / "depth.png"
+    Image.fromarray(np.full((48, 64), 450, np.uint16)).save(path)
+    return path
+
+
+def write_intrinsics(tmp_path, width=64, height=48):
+    path = tmp_path / "intrinsics.json"
+    path.write_text(json.dumps(dict(width=width, height=height, fx=60.0, fy=60.0, ppx=32.0, ppy=24.0, depth_scale=1000)))
+    return path
+
+
+def test_depth_png_errors(tmp_path, depth_png):
+    out = tmp_path / "out.json"
+    no_intrinsics = weldseam("plan", depth_png, "-o", out)
+    assert no_intrinsics.returncode == 2
+    one_error_line(no_intrinsics, "depth.png", "--intrinsics")
+    mismatch = weldseam("plan", depth_png, "--intrinsics", write_intrinsics(tmp_path, width=640, height=480), "-o", out)
+    assert mismatch.returncode == 2
+    one_error_line(mismatch, "depth.png", "64x48", "640x480")
+    eight_bit = tmp_path / "gray.png"
+    Image.fromarray(np.full((48, 64), 200, np.uint8)).save(eight_bit)
+    result = weldseam("plan", eight_bit, "--intrinsics", write_intrinsics(tmp_path), "-o", out)
+    assert result.returncode == 2
+    one_error_line(result, "gray.png", "16-bit")
+    assert not out.exists()
+
+
+def test_every_command_help_has_an_example_and_the_exit_codes():
+    result = weldseam("plan", "--help")
+    text = result.stdout.decode()
+    assert result.returncode == 0 and "Example" in text and "3: no weld seam found" in text
+
+
+def test_bad_set_option_names_the_key(groove_ply):
+    result = weldseam("plan", groove_ply, "--set", "normals.radius=0.01")
+    assert result.returncode == 2
+    one_error_line(result, "normals.radius")
