@@ -50,3 +50,14 @@ def test_a_step_a_convex_edge_and_a_plane_are_not_seams(rng):
     for shape in (lambda u: np.where(u > 0, 0.008, 0.0), lambda u: -np.abs(u), lambda u: 0 * u):
         u, w = profile(shape, rng)
         assert fit_profile(u, w, **PARAMS) is None
+
+
+def test_groove_centre_is_unbiased_on_noisy_symmetric_profiles():
+    rng = np.random.default_rng(0)
+    centres = []
+    for _ in range(200):
+        u = rng.uniform(-0.025, 0.025, 125)
+        w = v_groove(0.0)(u) + rng.normal(0, 0.0005, len(u))
+        fit = fit_profile(u, w, **PARAMS)
+        centres.append(fit.u)
+    assert abs(np.mean(centres)) < 0.15e-3  # scatter ~0.6 mm, so the mean's own noise is ~0.05 mm

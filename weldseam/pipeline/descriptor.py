@@ -3,15 +3,16 @@
 from __future__ import annotations
 
 import numpy as np
+from scipy import sparse
 
 from weldseam.errors import InputError
-from weldseam.pipeline.neighbours import graph_pairs, neighbour_mean, neighbour_variance, radius_graph
+from weldseam.pipeline.neighbours import graph_pairs, neighbour_mean, neighbour_variance
 
 VARIANTS = ("released", "thesis")
 
 
-def gradient_descriptor(points: np.ndarray, normals: np.ndarray, *, radius_m: float, variant: str = "released") -> np.ndarray:
-    """Descriptor (N,) over the neighbours N(i) within `radius_m`.
+def gradient_descriptor(normals: np.ndarray, graph: sparse.csr_matrix, *, variant: str = "released") -> np.ndarray:
+    """Descriptor (N,) over each point's neighbours N(i) (rows of `graph`).
 
     released: V_i = var_j(n_i . n_j), D_i = var_{j in N(i)}(V_j).
     thesis:   sigma_l(i) = var_j angle(n_i, n_j); sigma_g(i) = var_j angle(u_b, n_j) with u_b
@@ -20,16 +21,15 @@ def gradient_descriptor(points: np.ndarray, normals: np.ndarray, *, radius_m: fl
     """
     if variant not in VARIANTS:
         raise InputError(f"descriptor.variant must be one of {', '.join(VARIANTS)}, got {variant!r}")
-    graph = radius_graph(points, radius_m)
     if variant == "released":
         per_point = _normal_cosine_variance(graph, normals)
     else:
         rows, cols = graph_pairs(graph)
         cosines = np.einsum("ij,ij->i", normals[rows], normals[cols])
         theta = np.arccos(np.clip(cosines, -1.0, 1.0))
-        count = np.bincount(rows, minlength=len(points))
-        mean_theta = np.bincount(rows, theta, len(points)) / count
-        sigma_local = np.bincount(rows, theta**2, len(points)) / count - mean_theta**2
+        count = np.bincount(rows, minlength=len(normals))
+        mean_theta = np.bincount(rows, theta, len(normals)) / count
+        sigma_local = np.bincount(rows, theta**2, len(normals)) / count - mean_theta**2
         mean_normal = normals.sum(axis=0)
         mean_normal /= np.linalg.norm(mean_normal) or 1.0
         beta = np.arccos(np.clip(normals @ mean_normal, -1.0, 1.0))

@@ -5,15 +5,14 @@ from __future__ import annotations
 import numpy as np
 from scipy import sparse
 
-from weldseam.pipeline.neighbours import neighbour_covariance, radius_graph
+from weldseam.pipeline.neighbours import neighbour_covariance
 
 
-def estimate_normals(
-    points: np.ndarray, *, radius_m: float, camera_origin_m: np.ndarray
-) -> np.ndarray:
-    """Unit normals (N, 3): eigenvector of the smallest eigenvalue of the covariance of the
-    neighbours within `radius_m`, flipped so that n . (C - p) >= 0 (C = camera origin)."""
-    return orient_toward(pca_normals(points, radius_graph(points, radius_m)), points, camera_origin_m)
+def estimate_normals(points: np.ndarray, graph: sparse.csr_matrix, *, camera_origin_m: np.ndarray) -> np.ndarray:
+    """Unit normals (N, 3): eigenvector of the smallest eigenvalue of the covariance of each
+    point's neighbours (rows of `graph`, e.g. `radius_graph(points, radius_m)`), flipped so
+    that n . (C - p) >= 0 (C = camera origin)."""
+    return orient_toward(pca_normals(points, graph), points, camera_origin_m)
 
 
 def pca_normals(points: np.ndarray, graph: sparse.csr_matrix) -> np.ndarray:

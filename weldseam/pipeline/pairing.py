@@ -25,9 +25,11 @@ def pair_midpoints(
 
     The partner of rim point b is the nearest rim point q with (q - b) at 90 +- tolerance
     degrees to b's edge tangent and |q - b| <= max_width_m. Pairs whose width differs from
-    the median width by more than width_tolerance (a fraction) are dropped: at the band's
-    end caps the rim turns and pairs there are short or long, which made the reference
-    implementation zig-zag.
+    the median width of the pairs around them (midpoints within max_width_m / 2) by more
+    than width_tolerance (a fraction) are dropped: at the band's end caps the rim turns and
+    pairs there are short or long, which made the reference implementation zig-zag. The
+    median is local because one band can join strips of different widths (a groove meeting
+    the plate's end edges).
     """
     if len(rim) < 4:
         return np.empty((0, 3)), np.empty(0)
@@ -50,7 +52,8 @@ def pair_midpoints(
     order = np.lexsort((length, rows))
     first = order[np.r_[True, rows[order][1:] != rows[order][:-1]]]
     rows, cols, length = rows[first], cols[first], length[first]
-    median = np.median(length)
-    consistent = np.abs(length - median) <= width_tolerance * median
-    rows, cols, length = rows[consistent], cols[consistent], length[consistent]
-    return (rim[rows] + rim[cols]) / 2, length
+    midpoints = (rim[rows] + rim[cols]) / 2
+    around = cKDTree(midpoints).query_ball_point(midpoints, max_width_m / 2, workers=-1)
+    local_median = np.array([np.median(length[members]) for members in around])
+    consistent = np.abs(length - local_median) <= width_tolerance * local_median
+    return midpoints[consistent], length[consistent]

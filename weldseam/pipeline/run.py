@@ -18,9 +18,10 @@ from weldseam.config import PlanConfig, config_to_dict
 from weldseam.errors import InputError, NoSeamError, StageError, WeldseamError
 from weldseam.geometry import unit
 from weldseam.pipeline.boundary import boundary_mask
-from weldseam.pipeline.condition import condition_points
+from weldseam.pipeline.condition import condition_points, remove_statistical_outliers
 from weldseam.pipeline.descriptor import gradient_descriptor
 from weldseam.pipeline.grid import voxel_centroids
+from weldseam.pipeline.neighbours import radius_graph
 from weldseam.pipeline.normals import estimate_normals
 from weldseam.pipeline.order import order_chains
 from weldseam.pipeline.pairing import pair_midpoints
@@ -85,24 +86,36 @@ def plan_paths(
     with stage("condition"):
         fine = condition_points(
             scan.points_m, voxel_m=c.condition.voxel_m, crop_min_m=c.condition.crop_min_m,
-            crop_max_m=c.condition.crop_max_m, outlier_neighbours=c.condition.outlier_neighbours,
-            outlier_std_ratio=c.condition.outlier_std_ratio,
+            crop_max_m=c.condition.crop_max_m,
         )
-        if len(fine) < MIN_POINTS:
+        working = remove_statistical_outliers(
+            voxel_centroids(fine, c.condition.working_voxel_m),
+            neighbours=c.condition.outlier_neighbours, std_ratio=c.condition.outlier_std_ratio,
+        )
+        if len(working) < MIN_POINTS:
             raise InputError(f"{scan.source}: only {len(fine)} valid points left after conditioning")
-        working = voxel_centroids(fine, c.condition.working_voxel_m)
         fine_tree = cKDTree(fine)
     emit("condition", fine)
+    graphs: dict[float, object] = {}
+
+    def neighbourhoods(radius_m: float):
+        """One radius graph per distinct radius: smoothing moves points by well under a
+        voxel, so the neighbourhoods found before it still hold after it."""
+        if radius_m not in graphs:
+            graphs[radius_m] = radius_graph(working, radius_m)
+        return graphs[radius_m]
+
     with stage("smooth"):
         if c.smooth.enabled:
-            working = smooth_points(working, radius_m=c.smooth.radius_m, range_sigma_m=c.smooth.range_sigma_m)
+            working = smooth_points(
+                working, neighbourhoods(c.smooth.radius_m), radius_m=c.smooth.radius_m,
+                range_sigma_m=c.smooth.range_sigma_m,
+            )
     emit("smooth", working)
     with stage("normals"):
-        normals = estimate_normals(working, radius_m=c.normals.radius_m, camera_origin_m=camera)
+        normals = estimate_normals(working, neighbourhoods(c.normals.radius_m), camera_origin_m=camera)
     with stage("descriptor"):
-        descriptor = gradient_descriptor(
-            working, normals, radius_m=c.descriptor.radius_m, variant=c.descriptor.variant
-        )
+        descriptor = gradient_descriptor(normals, neighbourhoods(c.descriptor.radius_m), variant=c.descriptor.variant)
     emit("descriptor", working, descriptor)
     with stage("segment"):
         threshold = c.segment.threshold

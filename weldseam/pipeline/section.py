@@ -144,8 +144,7 @@ def _fit_groove(u: np.ndarray, w: np.ndarray, face_radius_m: float, min_depth_m:
         return None
     if np.percentile(depth[groove], 90) < min_depth_m:
         return None
-    u_left = _groove_edge(u, depth, groove, u[left_surface].max(), u_start, side=-1)
-    u_right = _groove_edge(u, depth, groove, u[right_surface].min(), u_end, side=+1)
+    u_left, u_right = _groove_edges(u, depth, groove, u[left_surface].max(), u[right_surface].min())
     # The surface beside the seam, within face_radius of each edge, sets the torch axis.
     beside = on_surface & (
         ((u >= u_left - face_radius_m) & (u <= u_left)) | ((u >= u_right) & (u <= u_right + face_radius_m))
@@ -157,26 +156,55 @@ def _fit_groove(u: np.ndarray, w: np.ndarray, face_radius_m: float, min_depth_m:
     return _ProfileFit(V_GROOVE, centre_u, intercept + slope * centre_u, slope / norm, -1.0 / norm)
 
 
-def _groove_edge(u, depth, groove, surface_end, groove_end, side: int) -> float:
-    """Where the wall on one side of the groove meets the surface (depth 0).
+def _groove_edges(u, depth, groove, left_surface_end, right_surface_end) -> tuple[float, float]:
+    """Where each groove wall meets the surface (depth 0).
 
-    The wall is the deep points in the outer half of the depression on that side; a line
-    depth = c + m u through them is solved for depth 0. Where the wall is hidden or too
-    short, the edge is the last surface point: a wall is hidden when it faces away from the
-    camera, and then the surface beside it is seen right up to the edge.
+    Each wall is the points between the last surface point and the groove bottom (its middle
+    15-80 %); a robust line depth = c + m u through them is solved for depth 0.
+    A wall too short to fit on its own takes the other wall's slope mirrored (bevels are
+    symmetric) and fits only its offset. A hidden wall (no points: it faces away from the
+    camera) ends at the last surface point, which the camera sees right up to the edge.
+    The last surface point is not used for a visible wall: its shallowest points pass for
+    surface, so that point lies ~1 mm inside the edge, and the bias differs side to side.
     """
-    fallback = surface_end
     deepest = np.percentile(depth[groove], 90)
-    middle = (u[groove[0]] + u[groove[-1]]) / 2
-    wall = groove[(depth[groove] < 0.8 * deepest) & ((u[groove] - middle) * side > 0)]
-    if len(wall) < 5 or np.ptp(u[wall]) < 0.001:
-        return fallback
-    c, m = _line(u[wall], depth[wall])
-    if m * side >= -0.2:  # depth must grow toward the middle, at least 11 degrees steep
-        return fallback
-    edge = -c / m
-    low, high = sorted((surface_end, groove_end))
-    return float(edge) if low - 0.002 <= edge <= high + 0.002 else fallback
+    bottom = np.median(u[groove][depth[groove] >= 0.8 * deepest])
+    # Wall points are chosen by position across the groove, never by depth: choosing by the
+    # fitted variable would bias the line where the noise differs between the walls.
+    walls = []
+    for side, surface_end in ((-1, left_surface_end), (1, right_surface_end)):
+        near, far = surface_end + 0.15 * (bottom - surface_end), surface_end + 0.8 * (bottom - surface_end)
+        low, high = sorted((near, far))
+        walls.append(np.flatnonzero((u >= low) & (u <= high)))
+    slopes = [_wall_slope(u[wall], depth[wall], side) for wall, side in zip(walls, (-1, 1))]
+    edges = []
+    for side, wall, slope, other, surface_end in zip(
+        (-1, 1), walls, slopes, slopes[::-1], (left_surface_end, right_surface_end)
+    ):
+        if slope is None and other is not None and len(wall) >= 2:
+            slope = -other
+        if slope is None:
+            edges.append(float(surface_end))
+            continue
+        offset = float(np.median(depth[wall] - slope * u[wall]))
+        edge = -offset / slope
+        # Between 3 mm outside the last surface point and the middle of the wall.
+        low, high = sorted((surface_end + side * 0.003, u[wall].mean()))
+        edges.append(float(edge) if low <= edge <= high else float(surface_end))
+    return edges[0], edges[1]
+
+
+def _wall_slope(u: np.ndarray, depth: np.ndarray, side: int) -> float | None:
+    """Slope of a robust line through one wall's points, or None when there are too few or
+    the line is not steep toward the middle (at least 11 degrees)."""
+    if len(u) < 4 or np.ptp(u) < 0.0006:
+        return None
+    intercept, slope = _line(u, depth)
+    residual = depth - (intercept + slope * u)
+    inliers = np.abs(residual) <= 2.5 * _noise(residual)
+    if inliers.sum() >= 4:
+        intercept, slope = _line(u[inliers], depth[inliers])
+    return slope if slope * side < -0.2 else None
 
 
 def _fit_fillet(u: np.ndarray, w: np.ndarray, min_leg_m: float) -> _ProfileFit | None:

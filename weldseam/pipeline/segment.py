@@ -29,7 +29,7 @@ def automatic_threshold(
     points = np.column_stack([u.ravel(), v.ravel(), height.ravel()])
     normals = pca_normals(points, radius_graph(points, normals_radius_m))
     normals *= np.where(normals[:, 2:3] < 0, -1.0, 1.0)
-    values = gradient_descriptor(points, normals, radius_m=descriptor_radius_m, variant=variant)
+    values = gradient_descriptor(normals, radius_graph(points, descriptor_radius_m), variant=variant)
     on_fold = (np.abs(points[:, 0]) <= spacing_m / 2) & (np.abs(points[:, 1]) <= half_extent / 3)
     return float(np.median(values[on_fold]))
 

@@ -3,21 +3,23 @@
 from __future__ import annotations
 
 import numpy as np
+from scipy import sparse
 
-from weldseam.pipeline.neighbours import graph_pairs, radius_graph
+from weldseam.pipeline.neighbours import graph_pairs
 from weldseam.pipeline.normals import pca_normals
 
 
-def smooth_points(points: np.ndarray, *, radius_m: float, range_sigma_m: float | None = None) -> np.ndarray:
+def smooth_points(
+    points: np.ndarray, graph: sparse.csr_matrix, *, radius_m: float, range_sigma_m: float | None = None
+) -> np.ndarray:
     """Bilateral smoothing of (N, 3) points along their local PCA normal n_i.
 
     p_i' = p_i + n_i * sum_j w_ij o_ij / sum_j w_ij, with o_ij = (p_j - p_i) . n_i and
     w_ij = exp(-|p_j - p_i|^2 / (2 (r/2)^2)) * exp(-o_ij^2 / (2 s^2)) over the neighbours
-    within r. Noise (small offsets) is averaged away; the far side of a crease (large
+    within r (the rows of `graph`). Noise (small offsets) is averaged away; the far side of a crease (large
     offsets) gets little weight, so groove edges stay sharp. s defaults to twice the median
     |o_ij|, a noise estimate.
     """
-    graph = radius_graph(points, radius_m)
     normals = pca_normals(points, graph)
     rows, cols = graph_pairs(graph)
     delta = points[cols] - points[rows]
