@@ -9,6 +9,7 @@ import pytest
 from PIL import Image
 
 from tests.conftest import v_groove_cloud
+from weldseam.config import PlanConfig
 from weldseam.io.clouds import write_ply
 
 CAMERA = "0,0.05,0.45"
@@ -45,7 +46,7 @@ def test_plan_writes_a_json_path_on_the_groove(groove_ply, tmp_path):
     data = json.loads(out.read_text())
     assert data["frame"] == "base" and data["units"] == "m"
     assert data["input"]["sha256"] and data["input"]["points"] > 50000
-    assert data["params"]["normals"]["radius_m"] == 0.01
+    assert data["params"]["normals"]["radius_m"] == PlanConfig().normals.radius_m
     (seam,) = data["seams"]
     poses = np.array([[p["x"], p["y"], p["z"]] for p in seam["poses"]])
     assert np.abs(poses[:, 1]).mean() < 0.0005 and np.abs(poses[:, 2] - 0.010).mean() < 0.0005

@@ -2,20 +2,23 @@ import numpy as np
 
 from tests.test_pipeline_helpers import crease_points
 from weldseam.pipeline.descriptor import gradient_descriptor
+from weldseam.pipeline.neighbours import radius_graph
 from weldseam.pipeline.normals import estimate_normals
 from weldseam.pipeline.segment import automatic_threshold, cluster_candidates
 
 SPACING = 0.0025
+RADIUS = 0.006
 
 
 def descriptor_of(points):
-    normals = estimate_normals(points, radius_m=0.01, camera_origin_m=np.array([0, 0, 1.0]))
-    return gradient_descriptor(points, normals, radius_m=0.01)
+    graph = radius_graph(points, RADIUS)
+    normals = estimate_normals(points, graph, camera_origin_m=np.array([0, 0, 1.0]))
+    return gradient_descriptor(normals, graph)
 
 
 def test_automatic_threshold_selects_a_real_crease_and_not_noise(rng):
     threshold = automatic_threshold(
-        spacing_m=SPACING, normals_radius_m=0.01, descriptor_radius_m=0.01, variant="released", min_crease_deg=20
+        spacing_m=SPACING, normals_radius_m=RADIUS, descriptor_radius_m=RADIUS, variant="released", min_crease_deg=20
     )
     strong = crease_points(35, SPACING)
     assert (descriptor_of(strong)[np.abs(strong[:, 0]) < 0.003] > threshold).all()
