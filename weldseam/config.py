@@ -86,6 +86,7 @@ class GridConfig:
 class OrderConfig:
     link_m: float = _param(0.008, "largest gap between consecutive seam points that is bridged")
     min_branch_m: float = _param(0.015, "side branches shorter than this are noise and pruned")
+    join_m: float = _param(0.025, "pieces of one seam whose facing ends are this close are joined")
 
 
 @dataclass(frozen=True)

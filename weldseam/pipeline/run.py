@@ -29,7 +29,7 @@ from weldseam.pipeline.resample import resample_seam
 from weldseam.pipeline.segment import automatic_threshold, cluster_candidates
 from weldseam.pipeline.smooth import smooth_points
 from weldseam.pipeline.thinning import thin_points
-from weldseam.pipeline.trace import TracedSeam, deduplicate, trace_chain
+from weldseam.pipeline.trace import TracedSeam, deduplicate, join_pieces, seam_length, trace_chain
 from weldseam.types import RunResult, Scan, WeldPath
 
 STAGES = (
@@ -167,7 +167,8 @@ def plan_paths(
                     max_extension_m=c.section.max_extension_m, section_params=section_params,
                 )
     with stage("section"):
-        seams = deduplicate(traced, tolerance_m=c.section.slab_m, min_length_m=c.segment.min_seam_length_m)
+        seams = join_pieces(deduplicate(traced, tolerance_m=c.section.slab_m), join_m=c.order.join_m)
+        seams = [seam for seam in seams if seam_length(seam) >= c.segment.min_seam_length_m]
     paths = []
     with stage("resample"):
         for seam in seams:
@@ -201,3 +202,4 @@ def _approximate_torch_axes(centres, points, normals, tree, radius_m) -> np.ndar
     neighbourhoods = tree.query_ball_point(centres, radius_m, workers=-1)
     axes = np.array([-normals[members].sum(axis=0) if members else np.zeros(3) for members in neighbourhoods])
     return unit(axes)
+

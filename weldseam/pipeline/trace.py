@@ -69,7 +69,7 @@ def trace_chain(
     for run, closed in _valid_runs(chain.points, valid, chain.closed, max_gap_m):
         run_fits = [fits[i] for i in run]
         if not closed:
-            run_fits = _extend(run_fits, joint, points, tree, step_m, max_extension_m, section_params)
+            run_fits = _extend(run_fits, joint, points, tree, step_m, max_gap_m, max_extension_m, section_params)
         seams.append(
             TracedSeam(
                 positions_m=np.array([fit.point_m for fit in run_fits]),
@@ -111,20 +111,35 @@ def _valid_runs(centres: np.ndarray, valid: np.ndarray, closed: bool, max_gap_m:
     return [(run, False) for run in runs if len(run) >= 2]
 
 
-def _extend(fits: list[SectionFit], joint, points, tree, step_m, max_extension_m, section_params) -> list[SectionFit]:
-    """Add sections beyond both ends while they fit the same joint near the predicted place."""
+def _extend(
+    fits: list[SectionFit], joint, points, tree, step_m, max_gap_m, max_extension_m, section_params
+) -> list[SectionFit]:
+    """Add sections beyond both ends while they fit the same joint near the predicted place.
+
+    A section that fails (a hole, a spatter blob) is stepped over; the extension stops after
+    `max_gap_m` without a fit. A fit counts when it lies within max(step / 2, 15 % of the
+    distance from the last fit) of the straight-line prediction, which follows curves of
+    radius down to ~40 mm across the largest gap.
+    """
     for at_start in (True, False):
         ordered = fits[::-1] if at_start else fits
         added = []
-        last, before = ordered[-1], ordered[-2]
-        direction = unit(last.point_m - before.point_m)
+        last = ordered[-1]
+        direction = _end_direction(np.array([fit.point_m for fit in ordered]), at_start=False)
         for _ in range(int(max_extension_m / step_m)):
-            predicted = last.point_m + step_m * direction
-            travel = direction[None]
-            axes = unit(last.torch_axis[None] - (last.torch_axis @ direction) * travel)
-            lateral = np.cross(travel, axes)
-            fit = analyse_sections(points, tree, predicted[None], travel, axes, lateral, **section_params)[0]
-            if fit.joint != joint or np.linalg.norm(fit.point_m - predicted) > 0.5 * step_m:
+            distance = step_m
+            while distance <= max_gap_m:
+                predicted = last.point_m + distance * direction
+                axes = unit(last.torch_axis[None] - (last.torch_axis @ direction) * direction[None])
+                fit = analyse_sections(
+                    points, tree, predicted[None], direction[None], axes, np.cross(direction[None], axes),
+                    **section_params,
+                )[0]
+                tolerance = max(0.5 * step_m, 0.15 * distance)
+                if fit.joint == joint and np.linalg.norm(fit.point_m - predicted) <= tolerance:
+                    break
+                distance += step_m
+            else:
                 break
             added.append(fit)
             direction = unit(fit.point_m - last.point_m)
@@ -134,20 +149,113 @@ def _extend(fits: list[SectionFit], joint, points, tree, step_m, max_extension_m
     return fits
 
 
-def deduplicate(seams: list[TracedSeam], *, tolerance_m: float, min_length_m: float) -> list[TracedSeam]:
+def deduplicate(seams: list[TracedSeam], *, tolerance_m: float) -> list[TracedSeam]:
     """Keep one copy of seams that several chains traced: a seam with most of its points
-    within `tolerance_m` of a longer kept seam is the same seam. Seams shorter than
-    `min_length_m` are dropped. Longest first, so the result order is deterministic."""
-    def length(seam: TracedSeam) -> float:
-        return float(np.linalg.norm(np.diff(seam.positions_m, axis=0), axis=1).sum())
-
+    within `tolerance_m` of a longer kept seam is the same seam. Longest first, so the
+    result order is deterministic."""
     kept: list[TracedSeam] = []
-    for seam in sorted(seams, key=lambda s: (-length(s), tuple(s.positions_m[0]))):
-        if length(seam) < min_length_m:
-            continue
+    for seam in sorted(seams, key=lambda s: (-seam_length(s), tuple(s.positions_m[0]))):
         duplicate = any(
             np.mean(cKDTree(other.positions_m).query(seam.positions_m)[0] <= tolerance_m) > 0.5 for other in kept
         )
         if not duplicate:
             kept.append(seam)
     return kept
+
+
+def seam_length(seam: TracedSeam) -> float:
+    """Arc length (m), including the closing segment of a loop."""
+    points = np.vstack([seam.positions_m, seam.positions_m[:1]]) if seam.closed else seam.positions_m
+    return float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
+
+
+def join_pieces(seams: list[TracedSeam], *, join_m: float, max_turn_deg: float = 30.0) -> list[TracedSeam]:
+    """Join pieces of one seam and close loops.
+
+    Two open pieces of the same joint are joined when an end of one and an end of the other
+    are within `join_m`, face each other (their outward directions differ from opposite by
+    less than `max_turn_deg`) and the gap runs along them; points of the second piece that
+    lie on the first (an overlap) are dropped first. Branches of a Y or T meet at larger
+    angles and stay separate. An open seam whose own ends meet that way is a closed loop.
+    """
+    pieces = sorted(seams, key=lambda s: (-len(s.positions_m), tuple(s.positions_m[0])))
+    cos_turn = np.cos(np.radians(max_turn_deg))
+    joined = True
+    while joined:
+        joined = False
+        for i, j in ((i, j) for i in range(len(pieces)) for j in range(len(pieces)) if i < j):
+            first, second = pieces[i], pieces[j]
+            if first.closed or second.closed or first.joint != second.joint:
+                continue
+            second = _without_overlap(second, first, join_m / 4)
+            if second is None:
+                pieces.pop(j)
+                joined = True
+                break
+            merged = _joined(first, second, join_m, cos_turn)
+            if merged is not None:
+                pieces[i] = merged
+                pieces.pop(j)
+                joined = True
+                break
+    return [_closed_if_ends_meet(piece, join_m, cos_turn) for piece in pieces]
+
+
+END_BASELINE_M = 0.008
+
+
+def _end_direction(points: np.ndarray, at_start: bool) -> np.ndarray:
+    """Outward unit direction at one end, from the point ~8 mm of arc inward to the end
+    (the last few points alone are too noisy to give a direction)."""
+    ordered = points if at_start else points[::-1]
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(ordered, axis=0), axis=1))])
+    k = max(1, min(int(np.searchsorted(arc, END_BASELINE_M)), len(ordered) - 1))
+    return unit(ordered[0] - ordered[k])
+
+
+def _joined(first: TracedSeam, second: TracedSeam, join_m: float, cos_turn: float) -> TracedSeam | None:
+    for first_reversed in (False, True):
+        for second_reversed in (False, True):
+            a = first.positions_m[::-1] if first_reversed else first.positions_m
+            b = second.positions_m[::-1] if second_reversed else second.positions_m
+            gap = b[0] - a[-1]
+            distance = np.linalg.norm(gap)
+            out_a, out_b = _end_direction(a, at_start=False), _end_direction(b, at_start=True)
+            facing = -out_a @ out_b >= cos_turn
+            along = distance < 1e-3 or unit(gap) @ out_a >= cos_turn
+            if distance <= join_m and facing and along:
+                axes_a = first.torch_axes[::-1] if first_reversed else first.torch_axes
+                axes_b = second.torch_axes[::-1] if second_reversed else second.torch_axes
+                weight = len(a) / (len(a) + len(b))
+                return TracedSeam(
+                    positions_m=np.vstack([a, b]),
+                    torch_axes=np.vstack([axes_a, axes_b]),
+                    closed=False,
+                    joint=first.joint,
+                    confidence=round(weight * first.confidence + (1 - weight) * second.confidence, 3),
+                )
+    return None
+
+
+def _without_overlap(piece: TracedSeam, other: TracedSeam, tolerance_m: float) -> TracedSeam | None:
+    """`piece` without its points that lie on `other`; None when fewer than 2 remain."""
+    near = cKDTree(other.positions_m).query(piece.positions_m)[0] <= tolerance_m
+    if not near.any():
+        return piece
+    keep = ~near
+    if keep.sum() < 2:
+        return None
+    return TracedSeam(piece.positions_m[keep], piece.torch_axes[keep], piece.closed, piece.joint, piece.confidence)
+
+
+def _closed_if_ends_meet(seam: TracedSeam, join_m: float, cos_turn: float) -> TracedSeam:
+    points = seam.positions_m
+    if seam.closed or len(points) < 8:
+        return seam
+    gap = points[0] - points[-1]
+    length = seam_length(seam)
+    out_end, out_start = _end_direction(points, at_start=False), _end_direction(points, at_start=True)
+    meets = np.linalg.norm(gap) <= join_m and -out_end @ out_start >= cos_turn and length > 4 * join_m
+    if not meets:
+        return seam
+    return TracedSeam(points, seam.torch_axes, True, seam.joint, seam.confidence)
