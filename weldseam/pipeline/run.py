@@ -29,7 +29,9 @@ from weldseam.pipeline.resample import resample_seam
 from weldseam.pipeline.segment import automatic_threshold, cluster_candidates
 from weldseam.pipeline.smooth import smooth_points
 from weldseam.pipeline.thinning import thin_points
-from weldseam.pipeline.trace import TracedSeam, deduplicate, join_pieces, seam_length, trace_chain
+from weldseam.pipeline.trace import (
+    TracedSeam, deduplicate, join_pieces, seam_length, split_at_junctions, trace_chain,
+)
 from weldseam.types import RunResult, Scan, WeldPath
 
 STAGES = (
@@ -168,6 +170,7 @@ def plan_paths(
                 )
     with stage("section"):
         seams = join_pieces(deduplicate(traced, tolerance_m=c.section.slab_m), join_m=c.order.join_m)
+        seams = split_at_junctions(seams, tolerance_m=c.order.join_m / 2)
         seams = [seam for seam in seams if seam_length(seam) >= c.segment.min_seam_length_m]
     paths = []
     with stage("resample"):

@@ -175,8 +175,8 @@ def join_pieces(seams: list[TracedSeam], *, join_m: float, max_turn_deg: float =
     Two open pieces of the same joint are joined when an end of one and an end of the other
     are within `join_m`, face each other (their outward directions differ from opposite by
     less than `max_turn_deg`) and the gap runs along them; points of the second piece that
-    lie on the first (an overlap) are dropped first. Branches of a Y or T meet at larger
-    angles and stay separate. An open seam whose own ends meet that way is a closed loop.
+    lie on the first (an overlap) are dropped first. Where a third seam also ends (the
+    junction of a Y or T) nothing is joined: the branches stay separate seams. An open seam whose own ends meet that way is a closed loop.
     """
     pieces = sorted(seams, key=lambda s: (-len(s.positions_m), tuple(s.positions_m[0])))
     cos_turn = np.cos(np.radians(max_turn_deg))
@@ -192,7 +192,8 @@ def join_pieces(seams: list[TracedSeam], *, join_m: float, max_turn_deg: float =
                 pieces.pop(j)
                 joined = True
                 break
-            merged = _joined(first, second, join_m, cos_turn)
+            others = [piece for k, piece in enumerate(pieces) if k not in (i, j)]
+            merged = _joined(first, second, join_m, cos_turn, others)
             if merged is not None:
                 pieces[i] = merged
                 pieces.pop(j)
@@ -213,7 +214,9 @@ def _end_direction(points: np.ndarray, at_start: bool) -> np.ndarray:
     return unit(ordered[0] - ordered[k])
 
 
-def _joined(first: TracedSeam, second: TracedSeam, join_m: float, cos_turn: float) -> TracedSeam | None:
+def _joined(
+    first: TracedSeam, second: TracedSeam, join_m: float, cos_turn: float, others: list[TracedSeam]
+) -> TracedSeam | None:
     for first_reversed in (False, True):
         for second_reversed in (False, True):
             a = first.positions_m[::-1] if first_reversed else first.positions_m
@@ -221,9 +224,11 @@ def _joined(first: TracedSeam, second: TracedSeam, join_m: float, cos_turn: floa
             gap = b[0] - a[-1]
             distance = np.linalg.norm(gap)
             out_a, out_b = _end_direction(a, at_start=False), _end_direction(b, at_start=True)
-            facing = -out_a @ out_b >= cos_turn
-            along = distance < 1e-3 or unit(gap) @ out_a >= cos_turn
-            if distance <= join_m and facing and along:
+            # A piece shorter than the direction baseline has no direction of its own.
+            facing = _length(b) < END_BASELINE_M or _length(a) < END_BASELINE_M or -out_a @ out_b >= cos_turn
+            reference = out_a if _length(a) >= _length(b) else -out_b
+            along = distance < 1e-3 or unit(gap) @ reference >= cos_turn
+            if distance <= join_m and facing and along and not _junction((a[-1] + b[0]) / 2, others, join_m):
                 axes_a = first.torch_axes[::-1] if first_reversed else first.torch_axes
                 axes_b = second.torch_axes[::-1] if second_reversed else second.torch_axes
                 weight = len(a) / (len(a) + len(b))
@@ -235,6 +240,46 @@ def _joined(first: TracedSeam, second: TracedSeam, join_m: float, cos_turn: floa
                     confidence=round(weight * first.confidence + (1 - weight) * second.confidence, 3),
                 )
     return None
+
+
+def _length(points: np.ndarray) -> float:
+    return float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
+
+
+def split_at_junctions(seams: list[TracedSeam], *, tolerance_m: float) -> list[TracedSeam]:
+    """Split a seam where another seam ends on its interior (a T or Y junction): each
+    branch becomes its own seam, meeting at the junction."""
+    result = list(seams)
+    changed = True
+    while changed:
+        changed = False
+        for index, seam in enumerate(result):
+            if len(seam.positions_m) < 4:
+                continue
+            ends = [piece.positions_m[k] for other, piece in enumerate(result) if other != index for k in (0, -1)]
+            if not ends:
+                continue
+            distance, nearest = cKDTree(seam.positions_m).query(np.array(ends))
+            inner = (distance <= tolerance_m) & (nearest >= 2) & (nearest <= len(seam.positions_m) - 3)
+            if seam.closed or not inner.any():
+                continue
+            cut = int(nearest[inner][0])
+            head = TracedSeam(seam.positions_m[: cut + 1], seam.torch_axes[: cut + 1], False, seam.joint, seam.confidence)
+            tail = TracedSeam(seam.positions_m[cut:], seam.torch_axes[cut:], False, seam.joint, seam.confidence)
+            result[index : index + 1] = [head, tail]
+            changed = True
+            break
+    return result
+
+
+def _junction(point: np.ndarray, others: list[TracedSeam], join_m: float) -> bool:
+    """True when another seam also ends near `point`: three or more ends meet there (a Y
+    or T), and no two of them are one seam."""
+    return any(
+        min(np.linalg.norm(other.positions_m[0] - point), np.linalg.norm(other.positions_m[-1] - point)) <= join_m
+        for other in others
+        if not other.closed
+    )
 
 
 def _without_overlap(piece: TracedSeam, other: TracedSeam, tolerance_m: float) -> TracedSeam | None:
