@@ -30,7 +30,7 @@ from weldseam.pipeline.segment import automatic_threshold, cluster_candidates
 from weldseam.pipeline.smooth import smooth_points
 from weldseam.pipeline.thinning import thin_points
 from weldseam.pipeline.trace import (
-    TracedSeam, deduplicate, join_pieces, seam_length, split_at_junctions, trace_chain,
+    TracedSeam, join_pieces, seam_length, split_at_junctions, trace_chain, trim_overlaps,
 )
 from weldseam.types import RunResult, Scan, WeldPath
 
@@ -169,7 +169,9 @@ def plan_paths(
                     max_extension_m=c.section.max_extension_m, section_params=section_params,
                 )
     with stage("section"):
-        seams = join_pieces(deduplicate(traced, tolerance_m=c.section.slab_m), join_m=c.order.join_m)
+        seams = join_pieces(trim_overlaps(traced, tolerance_m=c.section.slab_m), join_m=c.order.join_m)
+        # Fragments that joined nothing are noise; they must not split real seams either.
+        seams = [seam for seam in seams if seam_length(seam) >= c.order.min_branch_m]
         seams = split_at_junctions(seams, tolerance_m=c.order.join_m / 2)
         seams = [seam for seam in seams if seam_length(seam) >= c.segment.min_seam_length_m]
     paths = []

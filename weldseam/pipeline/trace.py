@@ -149,17 +149,24 @@ def _extend(
     return fits
 
 
-def deduplicate(seams: list[TracedSeam], *, tolerance_m: float) -> list[TracedSeam]:
-    """Keep one copy of seams that several chains traced: a seam with most of its points
-    within `tolerance_m` of a longer kept seam is the same seam. Longest first, so the
-    result order is deterministic."""
+def trim_overlaps(seams: list[TracedSeam], *, tolerance_m: float) -> list[TracedSeam]:
+    """Keep each stretch of seam once: several chains often trace the same seam, each a
+    little further than the others. Longest first, every seam loses the points within
+    `tolerance_m` of a seam already kept; what remains (possibly several runs) is kept."""
     kept: list[TracedSeam] = []
     for seam in sorted(seams, key=lambda s: (-seam_length(s), tuple(s.positions_m[0]))):
-        duplicate = any(
-            np.mean(cKDTree(other.positions_m).query(seam.positions_m)[0] <= tolerance_m) > 0.5 for other in kept
-        )
-        if not duplicate:
+        covered = np.zeros(len(seam.positions_m), bool)
+        for other in kept:
+            covered |= cKDTree(other.positions_m).query(seam.positions_m)[0] <= tolerance_m
+        if not covered.any():
             kept.append(seam)
+            continue
+        runs = np.split(np.flatnonzero(~covered), np.flatnonzero(np.diff(np.flatnonzero(~covered)) > 1) + 1)
+        kept += [
+            TracedSeam(seam.positions_m[run], seam.torch_axes[run], False, seam.joint, seam.confidence)
+            for run in runs
+            if len(run) >= 2
+        ]
     return kept
 
 
@@ -169,13 +176,14 @@ def seam_length(seam: TracedSeam) -> float:
     return float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
 
 
-def join_pieces(seams: list[TracedSeam], *, join_m: float, max_turn_deg: float = 30.0) -> list[TracedSeam]:
+def join_pieces(seams: list[TracedSeam], *, join_m: float, max_turn_deg: float = 45.0) -> list[TracedSeam]:
     """Join pieces of one seam and close loops.
 
     Two open pieces of the same joint are joined when an end of one and an end of the other
     are within `join_m`, face each other (their outward directions differ from opposite by
-    less than `max_turn_deg`) and the gap runs along them; points of the second piece that
-    lie on the first (an overlap) are dropped first. Where a third seam also ends (the
+    less than `max_turn_deg`: noisy ends of a 40 mm ring already differ by ~35 degrees
+    across a 5 mm gap, while Y and T branches meet at 75 degrees or more) and the gap runs
+    along them. Where a third seam also ends (the
     junction of a Y or T) nothing is joined: the branches stay separate seams. An open seam whose own ends meet that way is a closed loop.
     """
     pieces = sorted(seams, key=lambda s: (-len(s.positions_m), tuple(s.positions_m[0])))
@@ -187,11 +195,6 @@ def join_pieces(seams: list[TracedSeam], *, join_m: float, max_turn_deg: float =
             first, second = pieces[i], pieces[j]
             if first.closed or second.closed or first.joint != second.joint:
                 continue
-            second = _without_overlap(second, first, join_m / 4)
-            if second is None:
-                pieces.pop(j)
-                joined = True
-                break
             others = [piece for k, piece in enumerate(pieces) if k not in (i, j)]
             merged = _joined(first, second, join_m, cos_turn, others)
             if merged is not None:
@@ -228,7 +231,7 @@ def _joined(
             facing = _length(b) < END_BASELINE_M or _length(a) < END_BASELINE_M or -out_a @ out_b >= cos_turn
             reference = out_a if _length(a) >= _length(b) else -out_b
             along = distance < 1e-3 or unit(gap) @ reference >= cos_turn
-            if distance <= join_m and facing and along and not _junction((a[-1] + b[0]) / 2, others, join_m):
+            if distance <= join_m and facing and along and not _junction((a[-1] + b[0]) / 2, reference, others, join_m, cos_turn):
                 axes_a = first.torch_axes[::-1] if first_reversed else first.torch_axes
                 axes_b = second.torch_axes[::-1] if second_reversed else second.torch_axes
                 weight = len(a) / (len(a) + len(b))
@@ -272,25 +275,19 @@ def split_at_junctions(seams: list[TracedSeam], *, tolerance_m: float) -> list[T
     return result
 
 
-def _junction(point: np.ndarray, others: list[TracedSeam], join_m: float) -> bool:
-    """True when another seam also ends near `point`: three or more ends meet there (a Y
-    or T), and no two of them are one seam."""
-    return any(
-        min(np.linalg.norm(other.positions_m[0] - point), np.linalg.norm(other.positions_m[-1] - point)) <= join_m
-        for other in others
-        if not other.closed
-    )
-
-
-def _without_overlap(piece: TracedSeam, other: TracedSeam, tolerance_m: float) -> TracedSeam | None:
-    """`piece` without its points that lie on `other`; None when fewer than 2 remain."""
-    near = cKDTree(other.positions_m).query(piece.positions_m)[0] <= tolerance_m
-    if not near.any():
-        return piece
-    keep = ~near
-    if keep.sum() < 2:
-        return None
-    return TracedSeam(piece.positions_m[keep], piece.torch_axes[keep], piece.closed, piece.joint, piece.confidence)
+def _junction(point: np.ndarray, line: np.ndarray, others: list[TracedSeam], join_m: float, cos_turn: float) -> bool:
+    """True when a third seam branches off near `point`: one of its ends lies within
+    `join_m` and it leaves in another direction than `line` (the seam being joined). Such
+    ends meet at a Y or T, and no two of them are one seam."""
+    for other in others:
+        if other.closed or _length(other.positions_m) < END_BASELINE_M:
+            continue
+        for at_start in (True, False):
+            end = other.positions_m[0] if at_start else other.positions_m[-1]
+            leaving = -_end_direction(other.positions_m, at_start)
+            if np.linalg.norm(end - point) <= join_m and abs(leaving @ line) < cos_turn:
+                return True
+    return False
 
 
 def _closed_if_ends_meet(seam: TracedSeam, join_m: float, cos_turn: float) -> TracedSeam:
