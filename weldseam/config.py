@@ -24,8 +24,9 @@ class ConditionConfig:
     )
     crop_min_m: tuple[float, float, float] | None = _param(None, "crop box lower corner (base frame)")
     crop_max_m: tuple[float, float, float] | None = _param(None, "crop box upper corner (base frame)")
-    outlier_neighbours: int = _param(8, "k of the statistical outlier filter")
-    outlier_std_ratio: float = _param(3.0, "drop points whose mean k-NN distance exceeds mean + ratio * std")
+    outlier_fraction: float = _param(
+        0.25, "drop working points with fewer neighbours than this fraction of the median count"
+    )
 
 
 @dataclass(frozen=True)

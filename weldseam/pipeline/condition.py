@@ -1,9 +1,9 @@
-"""Input conditioning: drop invalid points, crop, voxel-merge, remove statistical outliers."""
+"""Input conditioning: drop invalid points, crop, voxel-merge, find isolated points."""
 
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import cKDTree
+from scipy import sparse
 
 from weldseam.pipeline.grid import voxel_centroids
 
@@ -18,13 +18,8 @@ def condition_points(points: np.ndarray, *, voxel_m: float, crop_min_m=None, cro
     return voxel_centroids(kept, voxel_m)
 
 
-def remove_statistical_outliers(points: np.ndarray, *, neighbours: int, std_ratio: float) -> np.ndarray:
-    """Drop points whose mean distance to their `neighbours` nearest neighbours exceeds the
-    cloud's mean of that distance + std_ratio * its standard deviation (stray returns,
-    flying pixels)."""
-    if len(points) <= neighbours:
-        return points
-    distances, _ = cKDTree(points).query(points, neighbours + 1, workers=-1)
-    mean_distance = distances[:, 1:].mean(axis=1)
-    limit = mean_distance.mean() + std_ratio * mean_distance.std()
-    return points[mean_distance <= limit]
+def sparse_points(graph: sparse.csr_matrix, *, min_fraction: float) -> np.ndarray:
+    """True for points with fewer neighbours (rows of `graph`) than `min_fraction` of the
+    median count: stray returns and the thin veils of flying pixels at depth edges."""
+    counts = np.diff(graph.indptr)
+    return counts < min_fraction * np.median(counts)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import sparse
 
-from weldseam.pipeline.neighbours import neighbour_covariance
+from weldseam.pipeline.neighbours import extreme_eigenvectors, neighbour_covariance
 
 
 def estimate_normals(points: np.ndarray, graph: sparse.csr_matrix, *, camera_origin_m: np.ndarray) -> np.ndarray:
@@ -17,7 +17,7 @@ def estimate_normals(points: np.ndarray, graph: sparse.csr_matrix, *, camera_ori
 
 def pca_normals(points: np.ndarray, graph: sparse.csr_matrix) -> np.ndarray:
     """Unoriented PCA normals (N, 3) over the neighbourhoods given by `graph`."""
-    return np.linalg.eigh(neighbour_covariance(points, graph))[1][:, :, 0]
+    return extreme_eigenvectors(neighbour_covariance(points, graph), largest=False)
 
 
 def orient_toward(normals: np.ndarray, points: np.ndarray, camera_origin_m: np.ndarray) -> np.ndarray:

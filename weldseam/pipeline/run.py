@@ -18,7 +18,7 @@ from weldseam.config import PlanConfig, config_to_dict
 from weldseam.errors import InputError, NoSeamError, StageError, WeldseamError
 from weldseam.geometry import unit
 from weldseam.pipeline.boundary import boundary_mask
-from weldseam.pipeline.condition import condition_points, remove_statistical_outliers
+from weldseam.pipeline.condition import condition_points, sparse_points
 from weldseam.pipeline.descriptor import gradient_descriptor
 from weldseam.pipeline.grid import voxel_centroids
 from weldseam.pipeline.neighbours import radius_graph
@@ -90,13 +90,10 @@ def plan_paths(
             scan.points_m, voxel_m=c.condition.voxel_m, crop_min_m=c.condition.crop_min_m,
             crop_max_m=c.condition.crop_max_m,
         )
-        working = remove_statistical_outliers(
-            voxel_centroids(fine, c.condition.working_voxel_m),
-            neighbours=c.condition.outlier_neighbours, std_ratio=c.condition.outlier_std_ratio,
-        )
+        working = voxel_centroids(fine, c.condition.working_voxel_m)
         if len(working) < MIN_POINTS:
             raise InputError(f"{scan.source}: only {len(fine)} valid points left after conditioning")
-        fine_tree = cKDTree(fine)
+        fine_tree = cKDTree(fine, balanced_tree=False)
     emit("condition", fine)
     graphs: dict[float, object] = {}
 
@@ -106,6 +103,14 @@ def plan_paths(
         if radius_m not in graphs:
             graphs[radius_m] = radius_graph(working, radius_m)
         return graphs[radius_m]
+
+    with stage("condition"):
+        # Isolated points go before any neighbourhood statistics; the graph is cut to match.
+        outliers = sparse_points(neighbourhoods(c.normals.radius_m), min_fraction=c.condition.outlier_fraction)
+        if outliers.any():
+            kept = ~outliers
+            graphs = {radius: graph[kept][:, kept] for radius, graph in graphs.items()}
+            working = working[kept]
 
     with stage("smooth"):
         if c.smooth.enabled:

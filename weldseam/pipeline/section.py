@@ -103,12 +103,14 @@ def fit_profile(
     return _fit_groove(u, w, face_radius_m, groove_min_depth_m) or _fit_fillet(u, w, fillet_min_leg_m)
 
 
-def _line(u: np.ndarray, w: np.ndarray, weights: np.ndarray | None = None) -> tuple[float, float]:
-    """Weighted least-squares line w = intercept + slope * u."""
-    weights = np.ones_like(u) if weights is None else weights
-    design = np.column_stack([np.ones_like(u), u]) * np.sqrt(weights)[:, None]
-    (intercept, slope), *_ = np.linalg.lstsq(design, w * np.sqrt(weights), rcond=None)
-    return float(intercept), float(slope)
+def _line(u: np.ndarray, w: np.ndarray) -> tuple[float, float]:
+    """Least-squares line w = intercept + slope * u, in closed form (called thousands of
+    times per scan on a few hundred points, where lstsq's overhead dominates)."""
+    mean_u, mean_w = u.mean(), w.mean()
+    du = u - mean_u
+    spread = float(du @ du)
+    slope = float(du @ (w - mean_w)) / spread if spread > 0 else 0.0
+    return float(mean_w - slope * mean_u), slope
 
 
 def _noise(residuals: np.ndarray) -> float:

@@ -22,10 +22,14 @@ def smooth_points(
     """
     normals = pca_normals(points, graph)
     rows, cols = graph_pairs(graph)
-    delta = points[cols] - points[rows]
-    offsets = np.einsum("ij,ij->i", delta, normals[rows])
+    # Pair arithmetic in float32 (millions of pairs); coordinates are taken relative to the
+    # centroid, so the precision stays far below a micrometre.
+    local = (points - points.mean(axis=0)).astype(np.float32)
+    delta = local[cols] - local[rows]
+    offsets = np.einsum("ij,ij->i", delta, normals[rows].astype(np.float32))
     sigma = range_sigma_m if range_sigma_m else 2.0 * np.median(np.abs(offsets)) + 1e-9
     weights = np.exp(-np.einsum("ij,ij->i", delta, delta) / (2 * (radius_m / 2) ** 2))
     weights *= np.exp(-(offsets**2) / (2 * sigma**2))
     shift = np.bincount(rows, weights * offsets, len(points)) / np.bincount(rows, weights, len(points))
+    shift = shift.astype(np.float64)
     return points + normals * shift[:, None]

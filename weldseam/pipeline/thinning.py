@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from weldseam.pipeline.neighbours import neighbour_covariance, neighbour_mean, radius_graph
+from weldseam.pipeline.neighbours import neighbour_mean, principal_directions, radius_graph
 
 
 def thin_points(points: np.ndarray, *, radius_m: float, iterations: int) -> np.ndarray:
@@ -20,6 +20,6 @@ def thin_points(points: np.ndarray, *, radius_m: float, iterations: int) -> np.n
             break
         graph = radius_graph(thinned, radius_m)
         step = neighbour_mean(graph, thinned) - thinned
-        tangent = np.linalg.eigh(neighbour_covariance(thinned, graph))[1][:, :, 2]
+        tangent = principal_directions(thinned, graph)
         thinned = thinned + step - np.sum(step * tangent, axis=1, keepdims=True) * tangent
     return thinned
