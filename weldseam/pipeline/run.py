@@ -175,6 +175,7 @@ def plan_paths(
                 )
     with stage("section"):
         seams = join_pieces(trim_overlaps(traced, tolerance_m=c.section.slab_m), join_m=c.order.join_m)
+        seams = trim_overlaps(seams, tolerance_m=c.section.slab_m)
         # Fragments that joined nothing are noise; they must not split real seams either.
         seams = [seam for seam in seams if seam_length(seam) >= c.order.min_branch_m]
         seams = split_at_junctions(seams, tolerance_m=c.order.join_m / 2)

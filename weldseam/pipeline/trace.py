@@ -188,20 +188,24 @@ def join_pieces(seams: list[TracedSeam], *, join_m: float, max_turn_deg: float =
     """
     pieces = sorted(seams, key=lambda s: (-len(s.positions_m), tuple(s.positions_m[0])))
     cos_turn = np.cos(np.radians(max_turn_deg))
-    joined = True
-    while joined:
-        joined = False
-        for i, j in ((i, j) for i in range(len(pieces)) for j in range(len(pieces)) if i < j):
-            first, second = pieces[i], pieces[j]
-            if first.closed or second.closed or first.joint != second.joint:
-                continue
-            others = [piece for k, piece in enumerate(pieces) if k not in (i, j)]
-            merged = _joined(first, second, join_m, cos_turn, others)
-            if merged is not None:
-                pieces[i] = merged
-                pieces.pop(j)
-                joined = True
-                break
+    while True:
+        # The closest feasible join first, so a small piece inside a gap is joined before
+        # the gap is bridged past it.
+        best = None
+        for i in range(len(pieces)):
+            for j in range(i + 1, len(pieces)):
+                first, second = pieces[i], pieces[j]
+                if first.closed or second.closed or first.joint != second.joint:
+                    continue
+                others = [piece for k, piece in enumerate(pieces) if k not in (i, j)]
+                candidate = _joined(first, second, join_m, cos_turn, others)
+                if candidate is not None and (best is None or candidate[0] < best[0]):
+                    best = (candidate[0], i, j, candidate[1])
+        if best is None:
+            break
+        _, i, j, merged = best
+        pieces[i] = merged
+        pieces.pop(j)
     return [_closed_if_ends_meet(piece, join_m, cos_turn) for piece in pieces]
 
 
@@ -219,30 +223,35 @@ def _end_direction(points: np.ndarray, at_start: bool) -> np.ndarray:
 
 def _joined(
     first: TracedSeam, second: TracedSeam, join_m: float, cos_turn: float, others: list[TracedSeam]
-) -> TracedSeam | None:
+) -> tuple[float, TracedSeam] | None:
+    """(gap, joined seam) for the closest way to join two pieces end to end, or None."""
+    best = None
     for first_reversed in (False, True):
         for second_reversed in (False, True):
             a = first.positions_m[::-1] if first_reversed else first.positions_m
             b = second.positions_m[::-1] if second_reversed else second.positions_m
             gap = b[0] - a[-1]
-            distance = np.linalg.norm(gap)
+            distance = float(np.linalg.norm(gap))
+            if distance > join_m or (best is not None and distance >= best[0]):
+                continue
             out_a, out_b = _end_direction(a, at_start=False), _end_direction(b, at_start=True)
             # A piece shorter than the direction baseline has no direction of its own.
             facing = _length(b) < END_BASELINE_M or _length(a) < END_BASELINE_M or -out_a @ out_b >= cos_turn
             reference = out_a if _length(a) >= _length(b) else -out_b
             along = distance < 1e-3 or unit(gap) @ reference >= cos_turn
-            if distance <= join_m and facing and along and not _junction((a[-1] + b[0]) / 2, reference, others, join_m, cos_turn):
-                axes_a = first.torch_axes[::-1] if first_reversed else first.torch_axes
-                axes_b = second.torch_axes[::-1] if second_reversed else second.torch_axes
-                weight = len(a) / (len(a) + len(b))
-                return TracedSeam(
-                    positions_m=np.vstack([a, b]),
-                    torch_axes=np.vstack([axes_a, axes_b]),
-                    closed=False,
-                    joint=first.joint,
-                    confidence=round(weight * first.confidence + (1 - weight) * second.confidence, 3),
-                )
-    return None
+            if not (facing and along) or _junction((a[-1] + b[0]) / 2, reference, others, join_m, cos_turn):
+                continue
+            axes_a = first.torch_axes[::-1] if first_reversed else first.torch_axes
+            axes_b = second.torch_axes[::-1] if second_reversed else second.torch_axes
+            weight = len(a) / (len(a) + len(b))
+            best = (distance, TracedSeam(
+                positions_m=np.vstack([a, b]),
+                torch_axes=np.vstack([axes_a, axes_b]),
+                closed=False,
+                joint=first.joint,
+                confidence=round(weight * first.confidence + (1 - weight) * second.confidence, 3),
+            ))
+    return best
 
 
 def _length(points: np.ndarray) -> float:
