@@ -23,16 +23,19 @@ def v_groove_cloud(
     return points
 
 
-def fillet_cloud(rng, *, web_height_m=0.05, noise_m=0.0003, pitch_m=0.0007):
+def fillet_cloud(rng, *, web_height_m=0.05, flange_m=0.01, noise_m=0.0003, pitch_m=0.0007):
     """An inside corner as a camera at (0, 0.3, 0.3) sees it: a vertical web face at y = 0
-    (facing +y, x along the seam) standing on a flange at z = 0 (y > 0). The seam is the
-    corner line y = 0, z = 0; the torch axis bisects the faces: (0, -1, -1) / sqrt(2)."""
+    (facing +y, x along the seam) standing on a flange (top at z = 0, 0 < y < 80 mm) that
+    lies on a table (z = -flange_m, y > 80 mm). The seam is the corner line y = 0, z = 0;
+    the torch axis bisects the faces: (0, -1, -1) / sqrt(2)."""
     xs = np.arange(-0.1, 0.1, pitch_m)
-    x, y = (a.ravel() for a in np.meshgrid(xs, np.arange(pitch_m / 2, 0.08, pitch_m)))
-    flange = np.column_stack([x, y, np.zeros_like(x)])
+    x, y = (a.ravel() for a in np.meshgrid(xs, np.arange(pitch_m / 2, 0.16, pitch_m)))
+    flange = np.column_stack([x, y, np.where(y < 0.08, 0.0, -flange_m)])
+    xs_edge, zs_edge = (a.ravel() for a in np.meshgrid(xs, np.arange(-flange_m, 0.0, pitch_m)))
+    flange_edge = np.column_stack([xs_edge, np.full_like(xs_edge, 0.08), zs_edge])
     xw, zw = (a.ravel() for a in np.meshgrid(xs, np.arange(pitch_m / 2, web_height_m, pitch_m)))
     web = np.column_stack([xw, np.zeros_like(xw), zw])
-    points = np.vstack([flange, web])
+    points = np.vstack([flange, flange_edge, web])
     return points + rng.normal(0.0, noise_m, points.shape)
 
 

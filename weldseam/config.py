@@ -88,6 +88,9 @@ class OrderConfig:
     link_m: float = _param(0.008, "largest gap between consecutive seam points that is bridged")
     min_branch_m: float = _param(0.015, "side branches shorter than this are noise and pruned")
     join_m: float = _param(0.025, "pieces of one seam whose facing ends are this close are joined")
+    max_join_turn_deg: float = _param(
+        100.0, "pieces meeting at up to this turn are joined (a groove over a block edge turns 90)"
+    )
 
 
 @dataclass(frozen=True)
@@ -98,6 +101,9 @@ class SectionConfig:
     groove_min_depth_m: float = _param(0.0015, "shallowest groove that counts")
     fillet_min_leg_m: float = _param(0.012, "shortest face of a fillet (shorter: a plate edge on a table)")
     min_valid_fraction: float = _param(0.5, "a seam whose sections fit its joint less often is rejected")
+    ignore_support_corners: bool = _param(
+        True, "a fillet on the support plane (the table) is where a part rests, not a joint"
+    )
     max_gap_m: float = _param(0.012, "a run of failed sections longer than this splits the seam")
     max_extension_m: float = _param(0.3, "how far an open seam end may be extended section by section")
 

@@ -72,3 +72,12 @@ def test_same_input_gives_identical_paths(rng):
     assert len(first.paths) == len(second.paths)
     for a, b in zip(first.paths, second.paths):
         assert np.array_equal(a.positions_m, b.positions_m) and np.array_equal(a.rotations, b.rotations)
+
+
+def test_a_box_on_the_table_is_not_a_fillet_but_on_a_flange_it_is(rng):
+    # The same corner geometry: resting on the table (the support plane) it is where a part
+    # stands, not a joint; one flange thickness above the table it is a fillet.
+    on_table = fillet_cloud(rng, flange_m=0.0)
+    with pytest.raises(NoSeamError):
+        plan(on_table, [0.0, 0.3, 0.3])
+    assert [p.joint for p in plan(fillet_cloud(rng), [0.0, 0.3, 0.3]).paths] == ["fillet"]

@@ -28,9 +28,10 @@ from weldseam.pipeline.pairing import pair_midpoints
 from weldseam.pipeline.resample import resample_seam
 from weldseam.pipeline.segment import automatic_threshold, cluster_candidates
 from weldseam.pipeline.smooth import smooth_points
+from weldseam.pipeline.support import find_support_plane
 from weldseam.pipeline.thinning import thin_points
 from weldseam.pipeline.trace import (
-    TracedSeam, join_pieces, seam_length, split_at_junctions, trace_chain, trim_overlaps,
+    TracedSeam, join_pieces, off_support, seam_length, split_at_junctions, trace_chain, trim_overlaps,
 )
 from weldseam.types import RunResult, Scan, WeldPath
 
@@ -39,6 +40,7 @@ STAGES = (
     "pairing", "thinning", "grid", "order", "section", "resample",
 )
 MIN_POINTS = 100
+SUPPORT_TOLERANCE_M = 0.002
 
 Dump = Callable[[str, np.ndarray, np.ndarray | None], None]
 
@@ -136,6 +138,11 @@ def plan_paths(
             working, descriptor > threshold,
             tolerance_m=c.segment.cluster_tolerance_m, min_length_m=c.segment.min_seam_length_m,
         )
+        support = None
+        if c.section.ignore_support_corners:
+            support = find_support_plane(
+                working, descriptor <= threshold, camera, tolerance_m=SUPPORT_TOLERANCE_M, below_fraction=0.05
+            )
     emit("segment", working[np.concatenate(clusters)] if clusters else np.empty((0, 3)))
 
     working_tree = cKDTree(working)
@@ -174,7 +181,11 @@ def plan_paths(
                     max_extension_m=c.section.max_extension_m, section_params=section_params,
                 )
     with stage("section"):
-        seams = join_pieces(trim_overlaps(traced, tolerance_m=c.section.slab_m), join_m=c.order.join_m)
+        traced = off_support(traced, support, SUPPORT_TOLERANCE_M)
+        seams = join_pieces(
+            trim_overlaps(traced, tolerance_m=c.section.slab_m), join_m=c.order.join_m,
+            max_turn_deg=c.order.max_join_turn_deg,
+        )
         seams = trim_overlaps(seams, tolerance_m=c.section.slab_m)
         # Fragments that joined nothing are noise; they must not split real seams either.
         seams = [seam for seam in seams if seam_length(seam) >= c.order.min_branch_m]

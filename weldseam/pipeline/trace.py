@@ -17,7 +17,7 @@ from scipy.spatial import cKDTree
 
 from weldseam.geometry import unit
 from weldseam.pipeline.order import Chain
-from weldseam.pipeline.section import SectionFit, analyse_sections, section_frames
+from weldseam.pipeline.section import FILLET, SectionFit, analyse_sections, section_frames
 
 
 PROBE_SECTIONS = 5
@@ -149,6 +149,19 @@ def _extend(
     return fits
 
 
+def off_support(seams: list[TracedSeam], support, tolerance_m: float) -> list[TracedSeam]:
+    """The seams that are not fillets on the support plane (`support` = (point, normal) or
+    None): there a part stands on the table."""
+    if support is None:
+        return seams
+    centre, normal = support
+    return [
+        seam
+        for seam in seams
+        if seam.joint != FILLET or np.median(np.abs((seam.positions_m - centre) @ normal)) > tolerance_m
+    ]
+
+
 def trim_overlaps(seams: list[TracedSeam], *, tolerance_m: float) -> list[TracedSeam]:
     """Keep each stretch of seam once: several chains often trace the same seam, each a
     little further than the others. Longest first, every seam loses the points within
@@ -176,18 +189,18 @@ def seam_length(seam: TracedSeam) -> float:
     return float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
 
 
-def join_pieces(seams: list[TracedSeam], *, join_m: float, max_turn_deg: float = 45.0) -> list[TracedSeam]:
+def join_pieces(seams: list[TracedSeam], *, join_m: float, max_turn_deg: float) -> list[TracedSeam]:
     """Join pieces of one seam and close loops.
 
     Two open pieces of the same joint are joined when an end of one and an end of the other
     are within `join_m`, face each other (their outward directions differ from opposite by
-    less than `max_turn_deg`: noisy ends of a 40 mm ring already differ by ~35 degrees
-    across a 5 mm gap, while Y and T branches meet at 75 degrees or more) and the gap runs
-    along them. Where a third seam also ends (the
+    less than `max_turn_deg`, so a groove turning over a block edge stays one seam) and the
+    gap runs along the longer one (within 60 degrees). Where a third seam also ends (the
     junction of a Y or T) nothing is joined: the branches stay separate seams. An open seam whose own ends meet that way is a closed loop.
     """
     pieces = sorted(seams, key=lambda s: (-len(s.positions_m), tuple(s.positions_m[0])))
     cos_turn = np.cos(np.radians(max_turn_deg))
+    cos_along = np.cos(np.radians(min(max_turn_deg, 60.0)))
     while True:
         # The closest feasible join first, so a small piece inside a gap is joined before
         # the gap is bridged past it.
@@ -198,7 +211,7 @@ def join_pieces(seams: list[TracedSeam], *, join_m: float, max_turn_deg: float =
                 if first.closed or second.closed or first.joint != second.joint:
                     continue
                 others = [piece for k, piece in enumerate(pieces) if k not in (i, j)]
-                candidate = _joined(first, second, join_m, cos_turn, others)
+                candidate = _joined(first, second, join_m, cos_turn, cos_along, others)
                 if candidate is not None and (best is None or candidate[0] < best[0]):
                     best = (candidate[0], i, j, candidate[1])
         if best is None:
@@ -206,7 +219,7 @@ def join_pieces(seams: list[TracedSeam], *, join_m: float, max_turn_deg: float =
         _, i, j, merged = best
         pieces[i] = merged
         pieces.pop(j)
-    return [_closed_if_ends_meet(piece, join_m, cos_turn) for piece in pieces]
+    return [_closed_if_ends_meet(piece, join_m, cos_along) for piece in pieces]
 
 
 END_BASELINE_M = 0.008
@@ -222,7 +235,7 @@ def _end_direction(points: np.ndarray, at_start: bool) -> np.ndarray:
 
 
 def _joined(
-    first: TracedSeam, second: TracedSeam, join_m: float, cos_turn: float, others: list[TracedSeam]
+    first: TracedSeam, second: TracedSeam, join_m: float, cos_turn: float, cos_along: float, others: list[TracedSeam]
 ) -> tuple[float, TracedSeam] | None:
     """(gap, joined seam) for the closest way to join two pieces end to end, or None."""
     best = None
@@ -238,8 +251,8 @@ def _joined(
             # A piece shorter than the direction baseline has no direction of its own.
             facing = _length(b) < END_BASELINE_M or _length(a) < END_BASELINE_M or -out_a @ out_b >= cos_turn
             reference = out_a if _length(a) >= _length(b) else -out_b
-            along = distance < 1e-3 or unit(gap) @ reference >= cos_turn
-            if not (facing and along) or _junction((a[-1] + b[0]) / 2, reference, others, join_m, cos_turn):
+            along = distance < 1e-3 or unit(gap) @ reference >= cos_along
+            if not (facing and along) or _junction((a[-1] + b[0]) / 2, others, join_m):
                 continue
             axes_a = first.torch_axes[::-1] if first_reversed else first.torch_axes
             axes_b = second.torch_axes[::-1] if second_reversed else second.torch_axes
@@ -284,19 +297,14 @@ def split_at_junctions(seams: list[TracedSeam], *, tolerance_m: float) -> list[T
     return result
 
 
-def _junction(point: np.ndarray, line: np.ndarray, others: list[TracedSeam], join_m: float, cos_turn: float) -> bool:
-    """True when a third seam branches off near `point`: one of its ends lies within
-    `join_m` and it leaves in another direction than `line` (the seam being joined). Such
-    ends meet at a Y or T, and no two of them are one seam."""
-    for other in others:
-        if other.closed or _length(other.positions_m) < END_BASELINE_M:
-            continue
-        for at_start in (True, False):
-            end = other.positions_m[0] if at_start else other.positions_m[-1]
-            leaving = -_end_direction(other.positions_m, at_start)
-            if np.linalg.norm(end - point) <= join_m and abs(leaving @ line) < cos_turn:
-                return True
-    return False
+def _junction(point: np.ndarray, others: list[TracedSeam], join_m: float) -> bool:
+    """True when a third seam (at least a direction baseline long) also ends within
+    `join_m` of `point`: three ends meet at a Y or T, and no two of them are one seam."""
+    return any(
+        min(np.linalg.norm(other.positions_m[0] - point), np.linalg.norm(other.positions_m[-1] - point)) <= join_m
+        for other in others
+        if not other.closed and _length(other.positions_m) >= END_BASELINE_M
+    )
 
 
 def _closed_if_ends_meet(seam: TracedSeam, join_m: float, cos_turn: float) -> TracedSeam:
