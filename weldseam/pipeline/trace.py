@@ -222,16 +222,19 @@ def join_pieces(seams: list[TracedSeam], *, join_m: float, max_turn_deg: float) 
     return [_closed_if_ends_meet(piece, join_m, cos_along) for piece in pieces]
 
 
-END_BASELINE_M = 0.008
+END_BASELINE_M = 0.012
 
 
 def _end_direction(points: np.ndarray, at_start: bool) -> np.ndarray:
-    """Outward unit direction at one end, from the point ~8 mm of arc inward to the end
-    (the last few points alone are too noisy to give a direction)."""
+    """Outward unit direction at one end: the principal direction of the points within
+    ~12 mm of arc from the end, pointing out (the last few points alone are too noisy)."""
     ordered = points if at_start else points[::-1]
     arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(ordered, axis=0), axis=1))])
     k = max(1, min(int(np.searchsorted(arc, END_BASELINE_M)), len(ordered) - 1))
-    return unit(ordered[0] - ordered[k])
+    chord = ordered[0] - ordered[k]
+    window = ordered[: k + 1] - ordered[: k + 1].mean(axis=0)
+    direction = np.linalg.svd(window, full_matrices=False)[2][0] if k >= 2 else chord
+    return unit(direction if direction @ chord >= 0 else -direction)
 
 
 def _joined(
