@@ -68,7 +68,7 @@ class BoundaryConfig:
 @dataclass(frozen=True)
 class PairingConfig:
     angle_tolerance_deg: float = _param(10.0, "partner direction within 90 +- this of the edge tangent")
-    max_width_m: float = _param(0.08, "widest band that is paired across")
+    max_width_m: float = _param(0.06, "widest band that is paired across")
     width_tolerance: float = _param(0.25, "pairs wider or narrower than the local median by this fraction are dropped")
 
 
@@ -88,6 +88,7 @@ class OrderConfig:
     link_m: float = _param(0.008, "largest gap between consecutive seam points that is bridged")
     min_branch_m: float = _param(0.015, "side branches shorter than this are noise and pruned")
     join_m: float = _param(0.025, "pieces of one seam whose facing ends are this close are joined")
+    overlap_m: float = _param(0.004, "traces closer than this to a longer one are the same seam")
     max_join_turn_deg: float = _param(
         100.0, "pieces meeting at up to this turn are joined (a groove over a block edge turns 90)"
     )

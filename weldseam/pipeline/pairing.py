@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from weldseam.pipeline.neighbours import principal_directions, radius_graph
+from weldseam.pipeline.neighbours import neighbour_mean, principal_directions, radius_graph
 
 
 def rim_tangents(rim: np.ndarray, radius_m: float) -> np.ndarray:
@@ -25,8 +25,9 @@ def pair_midpoints(
 
     The partner of rim point b is the nearest rim point q with (q - b) at 90 +- tolerance
     degrees to b's edge tangent and |q - b| <= max_width_m. Pairs whose width differs from
-    the median width of the pairs around them (midpoints within max_width_m / 2) by more
-    than width_tolerance (a fraction) are dropped: at the band's end caps the rim turns and
+    the typical width of the pairs around them (midpoints within max_width_m / 2; a mean
+    taken twice, the second time without the pairs the first one flagged) by more than
+    width_tolerance (a fraction) are dropped: at the band's end caps the rim turns and
     pairs there are short or long, which made the reference implementation zig-zag. The
     median is local because one band can join strips of different widths (a groove meeting
     the plate's end edges).
@@ -53,7 +54,9 @@ def pair_midpoints(
     first = order[np.r_[True, rows[order][1:] != rows[order][:-1]]]
     rows, cols, length = rows[first], cols[first], length[first]
     midpoints = (rim[rows] + rim[cols]) / 2
-    around = cKDTree(midpoints).query_ball_point(midpoints, max_width_m / 2, workers=-1)
-    local_median = np.array([np.median(length[members]) for members in around])
-    consistent = np.abs(length - local_median) <= width_tolerance * local_median
+    around = radius_graph(midpoints, max_width_m / 2)
+    typical = neighbour_mean(around, length)
+    inliers = (np.abs(length - typical) <= width_tolerance * typical).astype(float)
+    typical = (around @ (length * inliers)) / np.maximum(around @ inliers, 1.0)
+    consistent = np.abs(length - typical) <= width_tolerance * typical
     return midpoints[consistent], length[consistent]

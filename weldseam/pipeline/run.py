@@ -31,7 +31,7 @@ from weldseam.pipeline.smooth import smooth_points
 from weldseam.pipeline.support import find_support_plane
 from weldseam.pipeline.thinning import thin_points
 from weldseam.pipeline.trace import (
-    TracedSeam, join_pieces, off_support, seam_length, split_at_junctions, trace_chain, trim_overlaps,
+    TracedSeam, extend_seam, join_pieces, off_support, seam_length, split_at_junctions, trace_chain, trim_overlaps,
 )
 from weldseam.types import RunResult, Scan, WeldPath
 
@@ -177,16 +177,26 @@ def plan_paths(
                 traced += trace_chain(
                     chain, approx_axes, fine, fine_tree,
                     step_m=c.resample.spacing_m, max_gap_m=c.section.max_gap_m,
-                    min_valid_fraction=c.section.min_valid_fraction,
-                    max_extension_m=c.section.max_extension_m, section_params=section_params,
+                    min_valid_fraction=c.section.min_valid_fraction, section_params=section_params,
                 )
     with stage("section"):
         traced = off_support(traced, support, SUPPORT_TOLERANCE_M)
-        seams = join_pieces(
-            trim_overlaps(traced, tolerance_m=c.section.slab_m), join_m=c.order.join_m,
-            max_turn_deg=c.order.max_join_turn_deg,
-        )
-        seams = trim_overlaps(seams, tolerance_m=c.section.slab_m)
+
+        def trimmed_and_joined(seams):
+            seams = join_pieces(
+                trim_overlaps(seams, tolerance_m=c.order.overlap_m), join_m=c.order.join_m,
+                max_turn_deg=c.order.max_join_turn_deg,
+            )
+            return trim_overlaps(seams, tolerance_m=c.order.overlap_m)
+
+        seams = [
+            extend_seam(
+                seam, fine, fine_tree, step_m=c.resample.spacing_m, max_gap_m=c.section.max_gap_m,
+                max_extension_m=c.section.max_extension_m, section_params=section_params,
+            )
+            for seam in trimmed_and_joined(traced)
+        ]
+        seams = trimmed_and_joined(seams)
         # Fragments that joined nothing are noise; they must not split real seams either.
         seams = [seam for seam in seams if seam_length(seam) >= c.order.min_branch_m]
         seams = split_at_junctions(seams, tolerance_m=c.order.join_m / 2)

@@ -113,8 +113,15 @@ def _line(u: np.ndarray, w: np.ndarray) -> tuple[float, float]:
     return float(mean_w - slope * mean_u), slope
 
 
+def _median(values: np.ndarray) -> float:
+    """Upper median by partition (np.median's overhead dominates on a few hundred values)."""
+    middle = len(values) // 2
+    return float(np.partition(values, middle)[middle])
+
+
 def _noise(residuals: np.ndarray) -> float:
-    return 1.4826 * float(np.median(np.abs(residuals - np.median(residuals)))) + 1e-5
+    """Robust standard deviation: 1.4826 x the median absolute deviation (+ 10 um floor)."""
+    return 1.4826 * _median(np.abs(residuals - _median(residuals))) + 1e-5
 
 
 def _fit_groove(u: np.ndarray, w: np.ndarray, face_radius_m: float, min_depth_m: float) -> _ProfileFit | None:
@@ -170,7 +177,7 @@ def _groove_edges(u, depth, groove, left_surface_end, right_surface_end) -> tupl
     surface, so that point lies ~1 mm inside the edge, and the bias differs side to side.
     """
     deepest = np.percentile(depth[groove], 90)
-    bottom = np.median(u[groove][depth[groove] >= 0.8 * deepest])
+    bottom = _median(u[groove][depth[groove] >= 0.8 * deepest])
     # Wall points are chosen by position across the groove, never by depth: choosing by the
     # fitted variable would bias the line where the noise differs between the walls.
     walls = []
@@ -188,7 +195,7 @@ def _groove_edges(u, depth, groove, left_surface_end, right_surface_end) -> tupl
         if slope is None:
             edges.append(float(surface_end))
             continue
-        offset = float(np.median(depth[wall] - slope * u[wall]))
+        offset = _median(depth[wall] - slope * u[wall])
         edge = -offset / slope
         # Between 3 mm outside the last surface point and the middle of the wall.
         low, high = sorted((surface_end + side * 0.003, u[wall].mean()))

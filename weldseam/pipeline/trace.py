@@ -1,10 +1,11 @@
-"""Tracing: turn a coarse ordered chain into seam points via cross-sections.
+"""Tracing: turn coarse ordered chains into seams via cross-sections.
 
-The chain's sections are fitted; the seam's joint is the kind most sections agree on, and
+A chain's sections are fitted; the seam's joint is the kind most sections agree on, and
 a chain where fewer than `min_valid_fraction` of the sections fit that joint is not a seam
 (plate outer edges, table edges, steps, noise). Runs of failed sections longer than
-`max_gap_m` split the seam; open ends are extended section by section while the joint
-still fits, so the path reaches the seam's real ends and never its end caps.
+`max_gap_m` split the seam. The traced pieces are then trimmed where they overlap, joined,
+extended section by section to the seam's real ends (never its end caps), and split at
+T/Y junctions.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from scipy.spatial import cKDTree
 
 from weldseam.geometry import unit
 from weldseam.pipeline.order import Chain
-from weldseam.pipeline.section import FILLET, SectionFit, analyse_sections, section_frames
+from weldseam.pipeline.section import FILLET, analyse_sections, section_frames
 
 
 PROBE_SECTIONS = 5
@@ -43,7 +44,6 @@ def trace_chain(
     step_m: float,
     max_gap_m: float,
     min_valid_fraction: float,
-    max_extension_m: float,
     section_params: dict,
 ) -> list[TracedSeam]:
     """Seams found along one chain (none if the chain is not a seam).
@@ -68,8 +68,6 @@ def trace_chain(
     seams = []
     for run, closed in _valid_runs(chain.points, valid, chain.closed, max_gap_m):
         run_fits = [fits[i] for i in run]
-        if not closed:
-            run_fits = _extend(run_fits, joint, points, tree, step_m, max_gap_m, max_extension_m, section_params)
         seams.append(
             TracedSeam(
                 positions_m=np.array([fit.point_m for fit in run_fits]),
@@ -111,42 +109,50 @@ def _valid_runs(centres: np.ndarray, valid: np.ndarray, closed: bool, max_gap_m:
     return [(run, False) for run in runs if len(run) >= 2]
 
 
-def _extend(
-    fits: list[SectionFit], joint, points, tree, step_m, max_gap_m, max_extension_m, section_params
-) -> list[SectionFit]:
-    """Add sections beyond both ends while they fit the same joint near the predicted place.
+def extend_seam(
+    seam: TracedSeam, points, tree, *, step_m: float, max_gap_m: float, max_extension_m: float, section_params: dict
+) -> TracedSeam:
+    """The seam with sections added beyond both open ends while they fit its joint near
+    the predicted place, so the path reaches the seam's real ends.
 
     A section that fails (a hole, a spatter blob) is stepped over; the extension stops after
     `max_gap_m` without a fit. A fit counts when it lies within max(step / 2, 15 % of the
     distance from the last fit) of the straight-line prediction, which follows curves of
-    radius down to ~40 mm across the largest gap.
+    radius down to ~40 mm across the largest gap. Run on joined seams only: extending every
+    partial trace would walk the same seam once per piece.
     """
+    if seam.closed or len(seam.positions_m) < 2:
+        return seam
+    positions, axes = list(seam.positions_m), list(seam.torch_axes)
     for at_start in (True, False):
-        ordered = fits[::-1] if at_start else fits
-        added = []
-        last = ordered[-1]
-        direction = _end_direction(np.array([fit.point_m for fit in ordered]), at_start=False)
+        if at_start:
+            positions.reverse()
+            axes.reverse()
+        direction = _end_direction(np.array(positions), at_start=False)
+        last_point, last_axis = positions[-1], axes[-1]
         for _ in range(int(max_extension_m / step_m)):
             distance = step_m
             while distance <= max_gap_m:
-                predicted = last.point_m + distance * direction
-                axes = unit(last.torch_axis[None] - (last.torch_axis @ direction) * direction[None])
+                predicted = last_point + distance * direction
+                axis = unit(last_axis[None] - (last_axis @ direction) * direction[None])
                 fit = analyse_sections(
-                    points, tree, predicted[None], direction[None], axes, np.cross(direction[None], axes),
+                    points, tree, predicted[None], direction[None], axis, np.cross(direction[None], axis),
                     **section_params,
                 )[0]
-                tolerance = max(0.5 * step_m, 0.15 * distance)
-                if fit.joint == joint and np.linalg.norm(fit.point_m - predicted) <= tolerance:
+                if fit.joint == seam.joint and np.linalg.norm(fit.point_m - predicted) <= max(0.5 * step_m, 0.15 * distance):
                     break
                 distance += step_m
             else:
                 break
-            added.append(fit)
-            direction = unit(fit.point_m - last.point_m)
-            last = fit
-        ordered = ordered + added
-        fits = ordered[::-1] if at_start else ordered
-    return fits
+            positions.append(fit.point_m)
+            axes.append(fit.torch_axis)
+            # Re-aim along the last 12 mm: one 2 mm step alone is ~10 degrees noisy.
+            direction = _end_direction(np.array(positions), at_start=False)
+            last_point, last_axis = fit.point_m, fit.torch_axis
+        if at_start:
+            positions.reverse()
+            axes.reverse()
+    return TracedSeam(np.array(positions), np.array(axes), False, seam.joint, seam.confidence)
 
 
 def off_support(seams: list[TracedSeam], support, tolerance_m: float) -> list[TracedSeam]:
@@ -170,7 +176,9 @@ def trim_overlaps(seams: list[TracedSeam], *, tolerance_m: float) -> list[Traced
     for seam in sorted(seams, key=lambda s: (-seam_length(s), tuple(s.positions_m[0]))):
         covered = np.zeros(len(seam.positions_m), bool)
         for other in kept:
-            covered |= cKDTree(other.positions_m).query(seam.positions_m)[0] <= tolerance_m
+            # Against the polyline, not just its points: a joined seam may bridge a gap.
+            dense = _densified(other.positions_m, other.closed, tolerance_m / 2)
+            covered |= cKDTree(dense).query(seam.positions_m)[0] <= tolerance_m
         if not covered.any():
             kept.append(seam)
             continue
@@ -181,6 +189,17 @@ def trim_overlaps(seams: list[TracedSeam], *, tolerance_m: float) -> list[Traced
             if len(run) >= 2
         ]
     return kept
+
+
+def _densified(points: np.ndarray, closed: bool, step_m: float) -> np.ndarray:
+    """Points along the polyline through `points`, no more than `step_m` apart."""
+    if closed:
+        points = np.vstack([points, points[:1]])
+    steps = np.maximum(np.ceil(np.linalg.norm(np.diff(points, axis=0), axis=1) / step_m).astype(int), 1)
+    fractions = [np.arange(count) / count for count in steps]
+    starts, ends = points[:-1], points[1:]
+    dense = [start + np.outer(f, end - start) for start, end, f in zip(starts, ends, fractions)]
+    return np.vstack([*dense, points[-1:]]) if dense else points
 
 
 def seam_length(seam: TracedSeam) -> float:
