@@ -29,6 +29,8 @@ from weldseam.synthetic.metrics import evaluate
 from weldseam.synthetic.scenes import FAMILIES, make_scan
 from weldseam.types import Scan
 
+from tables import format_table
+
 MAX_ERROR_MM = 0.5
 MIN_COVERAGE = 0.95
 MAX_AXIS_ERROR_DEG = 3.0
@@ -98,16 +100,6 @@ def acceptance(summary: dict) -> dict[str, str]:
     }
     verdicts["overall"] = "FAIL" if "FAIL" in verdicts.values() else "PASS"
     return verdicts
-
-
-def format_table(header: list[str], rows: list[list[str]]) -> str:
-    """Fixed-width text table: first column left-aligned, the others right-aligned."""
-    widths = [max(len(row[k]) for row in [header, *rows]) for k in range(len(header))]
-    lines = [
-        "  ".join(cell.ljust(w) if k == 0 else cell.rjust(w) for k, (cell, w) in enumerate(zip(row, widths)))
-        for row in [header, *rows]
-    ]
-    return "\n".join(lines)
 
 
 def _number(value: float, digits: int) -> str:

@@ -20,6 +20,8 @@ import sys
 import tempfile
 import time
 
+from tables import format_table
+
 # Nothing heavy is imported here: Linux carries a process's peak memory (ru_maxrss) across
 # fork and exec, so every child would report at least this process's peak. Rendering and
 # planning therefore run in children, and this process stays small.
@@ -121,16 +123,6 @@ def benchmark(names: list[str], repeat: int) -> dict:
         for stage in stages
     }
     return {"repeat": repeat, "target": {"pipeline_s": TARGET_S, "peak_mb": TARGET_MB}, "stage_ms": stage_ms, "scans": scans}
-
-
-def format_table(header: list[str], rows: list[list[str]]) -> str:
-    """Fixed-width text table: first column left-aligned, the others right-aligned."""
-    widths = [max(len(row[k]) for row in [header, *rows]) for k in range(len(header))]
-    lines = [
-        "  ".join(cell.ljust(w) if k == 0 else cell.rjust(w) for k, (cell, w) in enumerate(zip(row, widths)))
-        for row in [header, *rows]
-    ]
-    return "\n".join(lines)
 
 
 def report(results: dict) -> str:

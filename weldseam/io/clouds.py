@@ -18,6 +18,7 @@ from typing import BinaryIO
 import numpy as np
 
 from weldseam.errors import InputError
+from weldseam.io.files import read_input
 from weldseam.io.atomic import atomic_write
 from weldseam.types import as_points
 
@@ -41,7 +42,7 @@ def read_cloud(path: str | Path, *, stdin: BinaryIO | None = None) -> tuple[np.n
                 f"{name}: unknown point cloud format {suffix or '(no extension)'!r} "
                 f"(supported: {', '.join(SUPPORTED)}, or - for a PLY on stdin)"
             )
-        data = _read_bytes(name)
+        data = read_input(name, "a point cloud file")
     if not data:
         raise InputError(f"{name}: empty input (0 bytes)")
     points = _PARSERS[suffix](data, name)
@@ -97,18 +98,6 @@ def write_ply(
         + ["end_header\n"]
     )
     atomic_write(path, header.encode("ascii") + records.tobytes())
-
-
-def _read_bytes(path: str) -> bytes:
-    """The whole file, or InputError naming it and saying why it cannot be read."""
-    try:
-        return Path(path).read_bytes()
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise InputError(f"{path}: is a directory, not a point cloud file") from None
-    except OSError as error:
-        raise InputError(f"{path}: cannot read ({error.strerror or error})") from None
 
 
 def _header_lines(data: bytes, name: str, kind: str, last: str):

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 
 from weldseam.errors import InputError
+from weldseam.io.files import read_json
 from weldseam.types import Intrinsics
 
 
@@ -38,12 +38,7 @@ def read_intrinsics(path: str | Path) -> Intrinsics:
     """Read `{"width","height","fx","fy","cx","cy","depth_scale"}` (RealSense `ppx`/`ppy`
     accepted for cx/cy). depth_scale is depth units per metre: 1000 for 1 mm units."""
     path = Path(path)
-    try:
-        data = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such file") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise InputError(f"{path}: not valid JSON ({error})") from None
+    data = read_json(path, "an intrinsics file")
     if not isinstance(data, dict):
         raise InputError(f"{path}: intrinsics must be a JSON object")
     data = dict(data)

@@ -20,6 +20,7 @@ from scipy.spatial.transform import Rotation
 
 from weldseam import __version__
 from weldseam.errors import InputError
+from weldseam.io.files import read_input
 from weldseam.geometry import quaternions_continuous, rotation_vectors
 from weldseam.io.atomic import atomic_write
 from weldseam.types import RunResult, WeldPath
@@ -128,15 +129,9 @@ def read_paths(path: str | Path) -> list[WeldPath]:
             f"{path}: unknown path file format {suffix or '(no extension)'!r} (use .json or .csv)"
         )
     try:
-        text = path.read_text(encoding="utf-8-sig")  # -sig: accept a spreadsheet BOM
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise InputError(f"{path}: is a directory, not a path file") from None
+        text = read_input(path, "a path file").decode("utf-8-sig")  # -sig: accept a spreadsheet BOM
     except UnicodeDecodeError:
         raise InputError(f"{path}: not UTF-8 text") from None
-    except OSError as error:
-        raise InputError(f"{path}: cannot read ({error.strerror or error})") from None
     if not text.strip():
         raise InputError(f"{path}: the file is empty")
     return _read_json(text, path) if suffix == ".json" else _read_csv(text, path)

@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
 import numpy as np
 
 from weldseam.errors import InputError
+from weldseam.io.files import read_json
 
 ROTATION_TOLERANCE = 1e-6
 
@@ -21,14 +21,7 @@ def read_camera_pose(path: str | Path) -> np.ndarray:
     (max |R^T R - I| <= 1e-6) with det +1 and whose last row is [0, 0, 0, 1].
     """
     path = Path(path)
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise InputError(f"{path}: is a directory, not a camera pose file") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise InputError(f"{path}: not valid JSON ({error})") from None
+    data = read_json(path, "a camera pose file")
     if not isinstance(data, dict) or "T_base_camera" not in data:
         raise InputError(f'{path}: expected a JSON object with a "T_base_camera" 4x4 matrix')
     rows = data["T_base_camera"]
