@@ -61,3 +61,13 @@ def test_groove_centre_is_unbiased_on_noisy_symmetric_profiles():
         fit = fit_profile(u, w, **PARAMS)
         centres.append(fit.u)
     assert abs(np.mean(centres)) < 0.15e-3  # scatter ~0.6 mm, so the mean's own noise is ~0.05 mm
+
+
+def test_one_face_beside_a_hole_is_not_a_fillet(rng):
+    # A flange seen obliquely up to the shadow a web casts: one tilted face, then no data
+    # but one stray point 18 mm away. The stray point and the face's last few points must
+    # not pass for a second face (the old leg measure saw a 20 mm leg there).
+    for _ in range(20):
+        u = np.arange(-0.022, 0.0005, 0.0007)
+        w = -0.45 * u + rng.normal(0, 0.0005, len(u))
+        assert fit_profile(np.append(u, 0.0185), np.append(w, 0.0084), **PARAMS) is None

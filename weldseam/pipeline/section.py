@@ -244,12 +244,24 @@ def _fit_fillet(u: np.ndarray, w: np.ndarray, min_leg_m: float) -> _ProfileFit |
     to_left = unit(np.array([-1.0, -b1]))
     to_right = unit(np.array([1.0, b2]))
     included = np.degrees(np.arccos(np.clip(to_left @ to_right, -1.0, 1.0)))
-    leg_left = (corner_u - u1.min()) * np.hypot(1.0, b1)
-    leg_right = (u2.max() - corner_u) * np.hypot(1.0, b2)
+    # Each face must really be there: its points spread at least a leg along the face, and
+    # are dense enough to fill it (a few noisy points beside a hole make a steep "face"
+    # whose u-extent times its slope looks long).
+    leg_left = _face_extent(u1, a1 + b1 * u1, corner_u, corner_w, to_left)
+    leg_right = _face_extent(u2, a2 + b2 * u2, corner_u, corner_w, to_right)
     if not (45.0 <= included <= 135.0) or min(leg_left, leg_right) < min_leg_m:
         return None
     axis = -unit(to_left + to_right)
     return _ProfileFit(FILLET, float(corner_u), float(corner_w), float(axis[0]), float(axis[1]))
+
+
+def _face_extent(u, w, corner_u, corner_w, direction, max_spacing_m: float = 0.002) -> float:
+    """How far a face reaches from the corner along `direction`, counting only a stretch
+    its points fill with gaps of at most `max_spacing_m`."""
+    along = np.sort((u - corner_u) * direction[0] + (w - corner_w) * direction[1])
+    gaps = np.flatnonzero(np.diff(along) > max_spacing_m)
+    start = along[gaps[-1] + 1] if len(gaps) else along[0]
+    return float(along[-1] - max(start, 0.0)) if along[-1] > 0 else 0.0
 
 
 def _segment_error(count, su, sw, suu, suw, sww):
