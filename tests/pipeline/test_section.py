@@ -71,3 +71,12 @@ def test_one_face_beside_a_hole_is_not_a_fillet(rng):
         u = np.arange(-0.022, 0.0005, 0.0007)
         w = -0.45 * u + rng.normal(0, 0.0005, len(u))
         assert fit_profile(np.append(u, 0.0185), np.append(w, 0.0084), **PARAMS) is None
+
+
+def test_a_hole_with_vertical_walls_is_not_a_groove(rng):
+    # Looking down into a through-hole: surface, nothing (vertical walls), the table far
+    # below, nothing, surface.
+    u = np.arange(-0.025, 0.025, 0.0005)
+    w = np.where(np.abs(u) < 0.006, -0.012, 0.0) + rng.normal(0, 0.0003, len(u))
+    seen = (np.abs(u) < 0.004) | (np.abs(u) > 0.008)
+    assert fit_profile(u[seen], w[seen], **PARAMS) is None

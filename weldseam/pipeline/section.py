@@ -153,7 +153,10 @@ def _fit_groove(u: np.ndarray, w: np.ndarray, face_radius_m: float, min_depth_m:
         return None
     if np.percentile(depth[groove], 90) < min_depth_m:
         return None
-    u_left, u_right = _groove_edges(u, depth, groove, u[left_surface].max(), u[right_surface].min())
+    edges = _groove_edges(u, depth, groove, u[left_surface].max(), u[right_surface].min())
+    if edges is None:
+        return None
+    u_left, u_right = edges
     # The surface beside the seam, within face_radius of each edge, sets the torch axis.
     beside = on_surface & (
         ((u >= u_left - face_radius_m) & (u <= u_left)) | ((u >= u_right) & (u <= u_right + face_radius_m))
@@ -165,8 +168,10 @@ def _fit_groove(u: np.ndarray, w: np.ndarray, face_radius_m: float, min_depth_m:
     return _ProfileFit(V_GROOVE, centre_u, intercept + slope * centre_u, slope / norm, -1.0 / norm)
 
 
-def _groove_edges(u, depth, groove, left_surface_end, right_surface_end) -> tuple[float, float]:
-    """Where each groove wall meets the surface (depth 0).
+def _groove_edges(u, depth, groove, left_surface_end, right_surface_end) -> tuple[float, float] | None:
+    """Where each groove wall meets the surface (depth 0), or None when neither wall is
+    seen: a bevelled wall facing the camera is always visible, so a depression with two
+    hidden (vertical) walls is a hole or a slot, not a V-groove.
 
     Each wall is the points between the last surface point and the groove bottom (its middle
     15-80 %); a robust line depth = c + m u through them is solved for depth 0.
@@ -186,6 +191,8 @@ def _groove_edges(u, depth, groove, left_surface_end, right_surface_end) -> tupl
         low, high = sorted((near, far))
         walls.append(np.flatnonzero((u >= low) & (u <= high)))
     slopes = [_wall_slope(u[wall], depth[wall], side) for wall, side in zip(walls, (-1, 1))]
+    if slopes == [None, None]:
+        return None
     edges = []
     for side, wall, slope, other, surface_end in zip(
         (-1, 1), walls, slopes, slopes[::-1], (left_surface_end, right_surface_end)
