@@ -101,7 +101,7 @@ class SectionConfig:
     face_radius_m: float = _param(0.012, "how far beside the seam the faces are fitted (torch axis)")
     groove_min_depth_m: float = _param(0.0015, "shallowest groove that counts")
     fillet_min_leg_m: float = _param(0.012, "shortest face of a fillet (shorter: a plate edge on a table)")
-    min_valid_fraction: float = _param(0.5, "a seam whose sections fit its joint less often is rejected")
+    min_valid_fraction: float = _param(0.6, "a seam whose sections fit its joint less often is rejected")
     ignore_support_corners: bool = _param(
         True, "a fillet on the support plane (the table) is where a part rests, not a joint"
     )
