@@ -215,7 +215,7 @@ def join_pieces(seams: list[TracedSeam], *, join_m: float, max_turn_deg: float) 
     Two open pieces of the same joint are joined when an end of one and an end of the other
     are within `join_m`, face each other (their outward directions differ from opposite by
     less than `max_turn_deg`, so a groove turning over a block edge stays one seam) and the
-    gap runs along the longer one (within 60 degrees). Where a third seam also ends (the
+    gap runs along their mean direction (within 60 degrees). Where a third seam also ends (the
     junction of a Y or T) nothing is joined: the branches stay separate seams. An open seam whose own ends meet that way is a closed loop.
     """
     pieces = sorted(seams, key=lambda s: (-len(s.positions_m), tuple(s.positions_m[0])))
@@ -273,7 +273,14 @@ def _joined(
             out_a, out_b = _end_direction(a, at_start=False), _end_direction(b, at_start=True)
             # A piece shorter than the direction baseline has no direction of its own.
             facing = _length(b) < END_BASELINE_M or _length(a) < END_BASELINE_M or -out_a @ out_b >= cos_turn
-            reference = out_a if _length(a) >= _length(b) else -out_b
+            # Through a bend the gap runs along the mean of the two directions; a piece too
+            # short to have a direction defers to the other.
+            if _length(a) < END_BASELINE_M:
+                reference = -out_b
+            elif _length(b) < END_BASELINE_M:
+                reference = out_a
+            else:
+                reference = unit(out_a - out_b)
             along = distance < 1e-3 or unit(gap) @ reference >= cos_along
             if not (facing and along) or _junction((a[-1] + b[0]) / 2, others, join_m):
                 continue
