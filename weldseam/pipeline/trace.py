@@ -117,9 +117,11 @@ def extend_seam(
 
     A section that fails (a hole, a spatter blob) is stepped over; the extension stops after
     `max_gap_m` without a fit. A fit counts when it lies within max(1.5 steps, 15 % of the
-    distance from the last fit) of the straight-line prediction: the fit is a verified
-    joint profile and the better estimate (near an end the prediction drifts by 1-3 mm),
-    and the bound still follows curves of radius down to ~40 mm across the largest gap. Run on joined seams only: extending every
+    distance from the last fit) of the straight-line prediction sideways (the fit is a
+    verified joint profile and the better estimate: near an end the prediction drifts by
+    1-3 mm; the bound follows curves of radius down to ~40 mm across the largest gap), and
+    within half a step along the torch axis (the surface does not jump; a section that
+    straddles the part's end face does). Run on joined seams only: extending every
     partial trace would walk the same seam once per piece.
     """
     if seam.closed or len(seam.positions_m) < 2:
@@ -140,7 +142,10 @@ def extend_seam(
                     points, tree, predicted[None], direction[None], axis, np.cross(direction[None], axis),
                     **section_params,
                 )[0]
-                if fit.joint == seam.joint and np.linalg.norm(fit.point_m - predicted) <= max(1.5 * step_m, 0.15 * distance):
+                offset = fit.point_m - predicted
+                depth = abs(offset @ axis[0])
+                sideways = np.linalg.norm(offset - (offset @ axis[0]) * axis[0])
+                if fit.joint == seam.joint and sideways <= max(1.5 * step_m, 0.15 * distance) and depth <= 0.5 * step_m:
                     break
                 distance += step_m
             else:
