@@ -106,7 +106,9 @@ def plan(
     units: Annotated[str, typer.Option(help="Units of a cloud file: m or mm.")] = "m",
     threshold: Annotated[Optional[float], typer.Option(help="Descriptor threshold (default: automatic).")] = None,
     spacing_mm: Annotated[Optional[float], typer.Option(help="Pose spacing along the seam, mm (default 2).")] = None,
-    settings: Annotated[list[str], typer.Option("--set", help="Override a parameter: section.key=value (repeatable).")] = [],
+    settings: Annotated[
+        Optional[list[str]], typer.Option("--set", help="Override a parameter: section.key=value (repeatable).")
+    ] = None,
     allow_empty: Annotated[bool, typer.Option(help="No seam found: write an empty path and exit 0.")] = False,
     dump_stages: Annotated[Optional[Path], typer.Option(help="Write each stage's points as PLY into this folder.")] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No messages on stderr except errors.")] = False,
@@ -121,7 +123,7 @@ def plan(
         from weldseam.io.scan import load_scan
         from weldseam.pipeline.run import plan_paths
 
-        overrides = _overrides(settings)
+        overrides = _overrides(settings or [])
         if threshold is not None:
             overrides.setdefault("segment", {})["threshold"] = threshold
         if spacing_mm is not None:

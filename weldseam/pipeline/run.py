@@ -30,9 +30,7 @@ from weldseam.pipeline.segment import automatic_threshold, cluster_candidates
 from weldseam.pipeline.smooth import smooth_points
 from weldseam.pipeline.support import find_support_plane
 from weldseam.pipeline.thinning import thin_points
-from weldseam.pipeline.trace import (
-    TracedSeam, extend_seam, join_pieces, off_support, seam_length, split_at_junctions, trace_chain, trim_overlaps,
-)
+from weldseam.pipeline.trace import TracedSeam, assemble_seams, trace_chain
 from weldseam.types import RunResult, Scan, WeldPath
 
 STAGES = (
@@ -40,7 +38,8 @@ STAGES = (
     "pairing", "thinning", "grid", "order", "section", "resample",
 )
 MIN_POINTS = 100
-SUPPORT_TOLERANCE_M = 0.002
+SUPPORT_TOLERANCE_M = 0.002  # how far a point may lie from the table plane and be on it
+SUPPORT_BELOW_FRACTION = 0.05  # share of points allowed beyond the table (noise, outliers)
 
 Dump = Callable[[str, np.ndarray, np.ndarray | None], None]
 
@@ -92,9 +91,9 @@ def plan_paths(
             scan.points_m, voxel_m=c.condition.voxel_m, crop_min_m=c.condition.crop_min_m,
             crop_max_m=c.condition.crop_max_m,
         )
+        if len(fine) < MIN_POINTS:
+            raise InputError(f"{scan.source}: only {len(fine)} valid points (finite, inside the crop box)")
         working = voxel_centroids(fine, c.condition.working_voxel_m)
-        if len(working) < MIN_POINTS:
-            raise InputError(f"{scan.source}: only {len(fine)} valid points left after conditioning")
         fine_tree = cKDTree(fine, balanced_tree=False)
     emit("condition", fine)
     graphs: dict[float, object] = {}
@@ -141,7 +140,8 @@ def plan_paths(
         support = None
         if c.section.ignore_support_corners:
             support = find_support_plane(
-                working, descriptor <= threshold, camera, tolerance_m=SUPPORT_TOLERANCE_M, below_fraction=0.05
+                working, descriptor <= threshold, camera, tolerance_m=SUPPORT_TOLERANCE_M,
+                below_fraction=SUPPORT_BELOW_FRACTION,
             )
     emit("segment", working[np.concatenate(clusters)] if clusters else np.empty((0, 3)))
 
@@ -180,27 +180,13 @@ def plan_paths(
                     min_valid_fraction=c.section.min_valid_fraction, section_params=section_params,
                 )
     with stage("section"):
-        traced = off_support(traced, support, SUPPORT_TOLERANCE_M)
-
-        def trimmed_and_joined(seams):
-            seams = join_pieces(
-                trim_overlaps(seams, tolerance_m=c.order.overlap_m), join_m=c.order.join_m,
-                max_turn_deg=c.order.max_join_turn_deg,
-            )
-            return trim_overlaps(seams, tolerance_m=c.order.overlap_m)
-
-        seams = [
-            extend_seam(
-                seam, fine, fine_tree, step_m=c.resample.spacing_m, max_gap_m=c.section.max_gap_m,
-                max_extension_m=c.section.max_extension_m, section_params=section_params,
-            )
-            for seam in trimmed_and_joined(traced)
-        ]
-        seams = trimmed_and_joined(seams)
-        # Fragments that joined nothing are noise; they must not split real seams either.
-        seams = [seam for seam in seams if seam_length(seam) >= c.order.min_branch_m]
-        seams = split_at_junctions(seams, tolerance_m=c.order.join_m / 2)
-        seams = [seam for seam in seams if seam_length(seam) >= c.segment.min_seam_length_m]
+        seams = assemble_seams(
+            traced, fine, fine_tree, support=support, support_tolerance_m=SUPPORT_TOLERANCE_M,
+            overlap_m=c.order.overlap_m, join_m=c.order.join_m, max_turn_deg=c.order.max_join_turn_deg,
+            min_branch_m=c.order.min_branch_m, min_seam_length_m=c.segment.min_seam_length_m,
+            step_m=c.resample.spacing_m, max_gap_m=c.section.max_gap_m,
+            max_extension_m=c.section.max_extension_m, section_params=section_params,
+        )
     paths = []
     with stage("resample"):
         for seam in seams:

@@ -186,7 +186,7 @@ def _groove_edges(u, depth, groove, left_surface_end, right_surface_end) -> tupl
     # Wall points are chosen by position across the groove, never by depth: choosing by the
     # fitted variable would bias the line where the noise differs between the walls.
     walls = []
-    for side, surface_end in ((-1, left_surface_end), (1, right_surface_end)):
+    for surface_end in (left_surface_end, right_surface_end):
         near, far = surface_end + 0.15 * (bottom - surface_end), surface_end + 0.8 * (bottom - surface_end)
         low, high = sorted((near, far))
         walls.append(np.flatnonzero((u >= low) & (u <= high)))

@@ -35,6 +35,45 @@ class TracedSeam:
     confidence: float
 
 
+def assemble_seams(
+    traced: list[TracedSeam],
+    points: np.ndarray,
+    tree,
+    *,
+    support,
+    support_tolerance_m: float,
+    overlap_m: float,
+    join_m: float,
+    max_turn_deg: float,
+    min_branch_m: float,
+    min_seam_length_m: float,
+    step_m: float,
+    max_gap_m: float,
+    max_extension_m: float,
+    section_params: dict,
+) -> list[TracedSeam]:
+    """The final seams from every chain's traces: fillets on the support plane dropped,
+    overlaps trimmed, pieces joined, open ends extended (then trimmed and joined again,
+    since extensions may meet), fragments dropped, T/Y junctions split."""
+
+    def trimmed_and_joined(seams: list[TracedSeam]) -> list[TracedSeam]:
+        joined = join_pieces(trim_overlaps(seams, tolerance_m=overlap_m), join_m=join_m, max_turn_deg=max_turn_deg)
+        return trim_overlaps(joined, tolerance_m=overlap_m)
+
+    seams = trimmed_and_joined(off_support(traced, support, support_tolerance_m))
+    seams = trimmed_and_joined([
+        extend_seam(
+            seam, points, tree, step_m=step_m, max_gap_m=max_gap_m, max_extension_m=max_extension_m,
+            section_params=section_params,
+        )
+        for seam in seams
+    ])
+    # Fragments that joined nothing are noise; they must not split real seams either.
+    seams = [seam for seam in seams if seam_length(seam) >= min_branch_m]
+    seams = split_at_junctions(seams, tolerance_m=join_m / 2)
+    return [seam for seam in seams if seam_length(seam) >= min_seam_length_m]
+
+
 def trace_chain(
     chain: Chain,
     approx_axes: np.ndarray,
