@@ -21,7 +21,7 @@ from weldseam.pipeline.order import Chain
 from weldseam.pipeline.section import FILLET, analyse_sections, section_frames
 
 
-PROBE_SECTIONS = 5
+PROBE_SECTIONS = 3
 
 
 @dataclass(frozen=True)
@@ -87,7 +87,7 @@ def trace_chain(
 ) -> list[TracedSeam]:
     """Seams found along one chain (none if the chain is not a seam).
 
-    A few evenly spaced sections are fitted first; when none of them fits a joint the
+    Three evenly spaced sections are fitted first; when none of them fits a joint the
     chain is rejected without fitting the rest (most candidates are plate or table edges).
     """
     travel, axes, lateral = section_frames(chain.points, approx_axes, chain.closed)
