@@ -30,7 +30,8 @@ from weldseam.pipeline.segment import automatic_threshold, cluster_candidates
 from weldseam.pipeline.smooth import smooth_points
 from weldseam.pipeline.support import find_support_plane
 from weldseam.pipeline.thinning import thin_points
-from weldseam.pipeline.trace import TracedSeam, assemble_seams, trace_chain
+from weldseam.pipeline.assemble import assemble_seams
+from weldseam.pipeline.trace import TracedSeam, trace_chain
 from weldseam.types import RunResult, Scan, WeldPath
 
 STAGES = (

@@ -1,0 +1,68 @@
+import numpy as np
+
+from weldseam.pipeline.assemble import join_pieces, split_at_junctions, trim_overlaps
+from weldseam.pipeline.trace import TracedSeam
+
+DOWN = np.array([0.0, 0.0, -1.0])
+
+
+def piece(points, joint="v_groove"):
+    points = np.asarray(points, float)
+    return TracedSeam(points, np.tile(DOWN, (len(points), 1)), False, joint, 1.0)
+
+
+def line(start, end, step=0.002):
+    start, end = np.asarray(start, float), np.asarray(end, float)
+    count = int(round(np.linalg.norm(end - start) / step)) + 1
+    return start + np.linspace(0, 1, count)[:, None] * (end - start)
+
+
+def join(seams):
+    return join_pieces(seams, join_m=0.025, max_turn_deg=100.0)
+
+
+def test_collinear_pieces_across_a_hole_join_into_one_seam_in_order():
+    (seam,) = join([piece(line([0.06, 0, 0], [0.1, 0, 0])), piece(line([0, 0, 0], [0.05, 0, 0]))])
+    x = seam.positions_m[:, 0]
+    assert np.all(np.diff(x) > 0) or np.all(np.diff(x) < 0)
+    assert np.isclose(abs(x[-1] - x[0]), 0.1)
+
+
+def test_pieces_of_a_ring_close_into_one_loop():
+    angles = np.linspace(0, 2 * np.pi, 180, endpoint=False)
+    ring = 0.05 * np.column_stack([np.cos(angles), np.sin(angles), np.zeros(180)])
+    pieces = [piece(ring[5:60]), piece(ring[66:120]), piece(ring[126:176])]  # three gaps of ~10 mm
+    (seam,) = join(pieces)
+    assert seam.closed and len(seam.positions_m) == 159
+
+
+def test_y_branches_stay_three_seams():
+    arms = [piece(line([0.004 * np.cos(a), 0.004 * np.sin(a), 0], [0.06 * np.cos(a), 0.06 * np.sin(a), 0])) for a in (0, 2.2, 4.1)]
+    assert len(join(arms)) == 3
+
+
+def test_a_groove_over_a_block_edge_joins_through_the_bend():
+    top = piece(line([0, 0.08, 0.1], [0, 0.003, 0.1]))
+    side = piece(line([0, 0.0, 0.094], [0, 0.0, 0.02]))  # down the side, starting 6 mm below the edge
+    (seam,) = join([top, side])
+    assert len(seam.positions_m) == len(top.positions_m) + len(side.positions_m)
+
+
+def test_parallel_seams_do_not_join():
+    assert len(join([piece(line([0, 0, 0], [0.1, 0, 0])), piece(line([0, 0.02, 0], [0.1, 0.02, 0]))])) == 2
+
+
+def test_an_overlapping_trace_keeps_only_what_it_adds():
+    longer, shifted = piece(line([0, 0, 0], [0.1, 0, 0])), piece(line([0.06, 0.001, 0], [0.13, 0.001, 0]))
+    kept = trim_overlaps([shifted, longer], tolerance_m=0.004)
+    assert len(kept) == 2
+    added = kept[1].positions_m
+    assert added[:, 0].min() > 0.1 and np.isclose(added[:, 0].max(), 0.13)
+
+
+def test_a_seam_is_split_where_another_ends_on_it():
+    through, stem = piece(line([0, 0, 0], [0.1, 0, 0])), piece(line([0.05, 0.003, 0], [0.05, 0.06, 0]))
+    seams = split_at_junctions([through, stem], tolerance_m=0.0125)
+    assert len(seams) == 3
+    ends = sorted(round(s.positions_m[:, 0].max(), 3) for s in seams if np.ptp(s.positions_m[:, 0]) > 0.01)
+    assert ends == [0.05, 0.1]

@@ -1,0 +1,219 @@
+"""Assembly: from every chain's traced pieces to the final seams.
+
+Several chains often trace the same seam, each a little further than the others, and a
+seam often comes out in pieces (holes in the scan, junctions in the candidate band). The
+pieces are trimmed where they overlap, joined end to end, extended to the seam's ends,
+joined again, and split at T/Y junctions into one seam per branch.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from weldseam.geometry import unit
+from weldseam.pipeline.section import FILLET
+from weldseam.pipeline.trace import END_BASELINE_M, TracedSeam, end_direction, extend_seam, seam_length
+
+
+def assemble_seams(
+    traced: list[TracedSeam],
+    points: np.ndarray,
+    tree,
+    *,
+    support,
+    support_tolerance_m: float,
+    overlap_m: float,
+    join_m: float,
+    max_turn_deg: float,
+    min_branch_m: float,
+    min_seam_length_m: float,
+    step_m: float,
+    max_gap_m: float,
+    max_extension_m: float,
+    section_params: dict,
+) -> list[TracedSeam]:
+    """The final seams from every chain's traces: fillets on the support plane dropped,
+    overlaps trimmed, pieces joined, open ends extended (then trimmed and joined again,
+    since extensions may meet), fragments dropped, T/Y junctions split."""
+
+    def trimmed_and_joined(seams: list[TracedSeam]) -> list[TracedSeam]:
+        joined = join_pieces(trim_overlaps(seams, tolerance_m=overlap_m), join_m=join_m, max_turn_deg=max_turn_deg)
+        return trim_overlaps(joined, tolerance_m=overlap_m)
+
+    seams = trimmed_and_joined(off_support(traced, support, support_tolerance_m))
+    seams = trimmed_and_joined([
+        extend_seam(
+            seam, points, tree, step_m=step_m, max_gap_m=max_gap_m, max_extension_m=max_extension_m,
+            section_params=section_params,
+        )
+        for seam in seams
+    ])
+    # Fragments that joined nothing are noise; they must not split real seams either.
+    seams = [seam for seam in seams if seam_length(seam) >= min_branch_m]
+    seams = split_at_junctions(seams, tolerance_m=join_m / 2)
+    return [seam for seam in seams if seam_length(seam) >= min_seam_length_m]
+
+def off_support(seams: list[TracedSeam], support, tolerance_m: float) -> list[TracedSeam]:
+    """The seams that are not fillets on the support plane (`support` = (point, normal) or
+    None): there a part stands on the table."""
+    if support is None:
+        return seams
+    centre, normal = support
+    return [
+        seam
+        for seam in seams
+        if seam.joint != FILLET or np.median(np.abs((seam.positions_m - centre) @ normal)) > tolerance_m
+    ]
+
+def trim_overlaps(seams: list[TracedSeam], *, tolerance_m: float) -> list[TracedSeam]:
+    """Keep each stretch of seam once: several chains often trace the same seam, each a
+    little further than the others. Longest first, every seam loses the points within
+    `tolerance_m` of a seam already kept; what remains (possibly several runs) is kept."""
+    kept: list[TracedSeam] = []
+    for seam in sorted(seams, key=lambda s: (-seam_length(s), tuple(s.positions_m[0]))):
+        covered = np.zeros(len(seam.positions_m), bool)
+        for other in kept:
+            # Against the polyline, not just its points: a joined seam may bridge a gap.
+            dense = _densified(other.positions_m, other.closed, tolerance_m / 2)
+            covered |= cKDTree(dense).query(seam.positions_m)[0] <= tolerance_m
+        if not covered.any():
+            kept.append(seam)
+            continue
+        runs = np.split(np.flatnonzero(~covered), np.flatnonzero(np.diff(np.flatnonzero(~covered)) > 1) + 1)
+        kept += [
+            TracedSeam(seam.positions_m[run], seam.torch_axes[run], False, seam.joint, seam.confidence)
+            for run in runs
+            if len(run) >= 2
+        ]
+    return kept
+
+def _densified(points: np.ndarray, closed: bool, step_m: float) -> np.ndarray:
+    """Points along the polyline through `points`, no more than `step_m` apart."""
+    if closed:
+        points = np.vstack([points, points[:1]])
+    steps = np.maximum(np.ceil(np.linalg.norm(np.diff(points, axis=0), axis=1) / step_m).astype(int), 1)
+    fractions = [np.arange(count) / count for count in steps]
+    starts, ends = points[:-1], points[1:]
+    dense = [start + np.outer(f, end - start) for start, end, f in zip(starts, ends, fractions)]
+    return np.vstack([*dense, points[-1:]]) if dense else points
+
+def join_pieces(seams: list[TracedSeam], *, join_m: float, max_turn_deg: float) -> list[TracedSeam]:
+    """Join pieces of one seam and close loops.
+
+    Two open pieces of the same joint are joined when an end of one and an end of the other
+    are within `join_m`, face each other (their outward directions differ from opposite by
+    less than `max_turn_deg`, so a groove turning over a block edge stays one seam) and the
+    gap runs along their mean direction (within 60 degrees). Where a third seam also ends (the
+    junction of a Y or T) nothing is joined: the branches stay separate seams. An open seam whose own ends meet that way is a closed loop.
+    """
+    pieces = sorted(seams, key=lambda s: (-len(s.positions_m), tuple(s.positions_m[0])))
+    cos_turn = np.cos(np.radians(max_turn_deg))
+    cos_along = np.cos(np.radians(min(max_turn_deg, 60.0)))
+    while True:
+        # The closest feasible join first, so a small piece inside a gap is joined before
+        # the gap is bridged past it.
+        best = None
+        for i in range(len(pieces)):
+            for j in range(i + 1, len(pieces)):
+                first, second = pieces[i], pieces[j]
+                if first.closed or second.closed or first.joint != second.joint:
+                    continue
+                others = [piece for k, piece in enumerate(pieces) if k not in (i, j)]
+                candidate = _joined(first, second, join_m, cos_turn, cos_along, others)
+                if candidate is not None and (best is None or candidate[0] < best[0]):
+                    best = (candidate[0], i, j, candidate[1])
+        if best is None:
+            break
+        _, i, j, merged = best
+        pieces[i] = merged
+        pieces.pop(j)
+    return [_closed_if_ends_meet(piece, join_m, cos_along) for piece in pieces]
+
+def _joined(
+    first: TracedSeam, second: TracedSeam, join_m: float, cos_turn: float, cos_along: float, others: list[TracedSeam]
+) -> tuple[float, TracedSeam] | None:
+    """(gap, joined seam) for the closest way to join two pieces end to end, or None."""
+    best = None
+    for first_reversed in (False, True):
+        for second_reversed in (False, True):
+            a = first.positions_m[::-1] if first_reversed else first.positions_m
+            b = second.positions_m[::-1] if second_reversed else second.positions_m
+            gap = b[0] - a[-1]
+            distance = float(np.linalg.norm(gap))
+            if distance > join_m or (best is not None and distance >= best[0]):
+                continue
+            out_a, out_b = end_direction(a, at_start=False), end_direction(b, at_start=True)
+            # A piece shorter than the direction baseline has no direction of its own.
+            facing = _length(b) < END_BASELINE_M or _length(a) < END_BASELINE_M or -out_a @ out_b >= cos_turn
+            # Through a bend the gap runs along the mean of the two directions; a piece too
+            # short to have a direction defers to the other.
+            if _length(a) < END_BASELINE_M:
+                reference = -out_b
+            elif _length(b) < END_BASELINE_M:
+                reference = out_a
+            else:
+                reference = unit(out_a - out_b)
+            along = distance < 1e-3 or unit(gap) @ reference >= cos_along
+            if not (facing and along) or _junction((a[-1] + b[0]) / 2, others, join_m):
+                continue
+            axes_a = first.torch_axes[::-1] if first_reversed else first.torch_axes
+            axes_b = second.torch_axes[::-1] if second_reversed else second.torch_axes
+            weight = len(a) / (len(a) + len(b))
+            best = (distance, TracedSeam(
+                positions_m=np.vstack([a, b]),
+                torch_axes=np.vstack([axes_a, axes_b]),
+                closed=False,
+                joint=first.joint,
+                confidence=round(weight * first.confidence + (1 - weight) * second.confidence, 3),
+            ))
+    return best
+
+def _length(points: np.ndarray) -> float:
+    return float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
+
+def split_at_junctions(seams: list[TracedSeam], *, tolerance_m: float) -> list[TracedSeam]:
+    """Split a seam where another seam ends on its interior (a T or Y junction): each
+    branch becomes its own seam, meeting at the junction."""
+    result = list(seams)
+    changed = True
+    while changed:
+        changed = False
+        for index, seam in enumerate(result):
+            if len(seam.positions_m) < 4:
+                continue
+            ends = [piece.positions_m[k] for other, piece in enumerate(result) if other != index for k in (0, -1)]
+            if not ends:
+                continue
+            distance, nearest = cKDTree(seam.positions_m).query(np.array(ends))
+            inner = (distance <= tolerance_m) & (nearest >= 2) & (nearest <= len(seam.positions_m) - 3)
+            if seam.closed or not inner.any():
+                continue
+            cut = int(nearest[inner][0])
+            head = TracedSeam(seam.positions_m[: cut + 1], seam.torch_axes[: cut + 1], False, seam.joint, seam.confidence)
+            tail = TracedSeam(seam.positions_m[cut:], seam.torch_axes[cut:], False, seam.joint, seam.confidence)
+            result[index : index + 1] = [head, tail]
+            changed = True
+            break
+    return result
+
+def _junction(point: np.ndarray, others: list[TracedSeam], join_m: float) -> bool:
+    """True when a third seam (at least a direction baseline long) also ends within
+    `join_m` of `point`: three ends meet at a Y or T, and no two of them are one seam."""
+    return any(
+        min(np.linalg.norm(other.positions_m[0] - point), np.linalg.norm(other.positions_m[-1] - point)) <= join_m
+        for other in others
+        if not other.closed and _length(other.positions_m) >= END_BASELINE_M
+    )
+
+def _closed_if_ends_meet(seam: TracedSeam, join_m: float, cos_turn: float) -> TracedSeam:
+    points = seam.positions_m
+    if seam.closed or len(points) < 8:
+        return seam
+    gap = points[0] - points[-1]
+    length = seam_length(seam)
+    out_end, out_start = end_direction(points, at_start=False), end_direction(points, at_start=True)
+    meets = np.linalg.norm(gap) <= join_m and -out_end @ out_start >= cos_turn and length > 4 * join_m
+    if not meets:
+        return seam
+    return TracedSeam(points, seam.torch_axes, True, seam.joint, seam.confidence)
