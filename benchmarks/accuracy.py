@@ -29,7 +29,7 @@ from weldseam.synthetic.metrics import evaluate
 from weldseam.synthetic.scenes import FAMILIES, make_scan
 from weldseam.types import Scan
 
-from tables import format_table
+from common import format_table, selected_families
 
 MAX_ERROR_MM = 0.5
 MIN_COVERAGE = 0.95
@@ -146,10 +146,7 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=2, help="Worker processes (default: %(default)s).")
     parser.add_argument("--json", action="store_true", help="Print the results as JSON instead of tables.")
     args = parser.parse_args()
-    families = args.families.split(",")
-    unknown = sorted(set(families) - set(FAMILIES))
-    if unknown:
-        parser.error(f"unknown families {unknown}; known: {', '.join(FAMILIES)}")
+    families = selected_families(parser, args.families, FAMILIES)
     if args.seeds < 1 or args.workers < 1:
         parser.error("--seeds and --workers must be at least 1")
 

@@ -29,7 +29,7 @@ from weldseam.pipeline.neighbours import radius_graph
 from weldseam.pipeline.smooth import smooth_points
 from weldseam.synthetic.scenes import FAMILIES, make_scan
 
-from tables import format_table
+from common import format_table, selected_families
 
 CONFIG = PlanConfig()
 RADIUS_M = CONFIG.smooth.radius_m
@@ -172,10 +172,7 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, default=5, help="Seeds 0 .. N-1 per family (default: %(default)s).")
     parser.add_argument("--json", action="store_true", help="Print the results as JSON instead of tables.")
     args = parser.parse_args()
-    families = args.families.split(",")
-    unknown = sorted(set(families) - set(FAMILIES))
-    if unknown:
-        parser.error(f"unknown families {unknown}; known: {', '.join(FAMILIES)}")
+    families = selected_families(parser, args.families, FAMILIES)
     if args.seeds < 1:
         parser.error("--seeds must be at least 1")
 

@@ -20,7 +20,7 @@ import sys
 import tempfile
 import time
 
-from tables import format_table
+from common import format_table
 
 # Nothing heavy is imported here: Linux carries a process's peak memory (ru_maxrss) across
 # fork and exec, so every child would report at least this process's peak. Rendering and

@@ -1,4 +1,4 @@
-"""Plain fixed-width text tables for the benchmark reports."""
+"""Shared helpers of the benchmark scripts: text tables, family selection."""
 
 
 def format_table(header: list[str], rows: list[list[str]]) -> str:
@@ -9,3 +9,12 @@ def format_table(header: list[str], rows: list[list[str]]) -> str:
         for row in [header, *rows]
     ]
     return "\n".join(lines)
+
+
+def selected_families(parser, text: str, known) -> list[str]:
+    """The comma-separated family names in `text`; a parser error naming unknown ones."""
+    families = text.split(",")
+    unknown = sorted(set(families) - set(known))
+    if unknown:
+        parser.error(f"unknown families {unknown}; known: {', '.join(known)}")
+    return families
