@@ -182,3 +182,14 @@ def test_bad_set_option_names_the_key(groove_ply):
     result = weldseam("plan", groove_ply, "--set", "normals.radius=0.01")
     assert result.returncode == 2
     one_error_line(result, "normals.radius")
+
+
+def test_crop_box_keeps_the_seam_inside_it(groove_ply, tmp_path):
+    out = tmp_path / "path.csv"
+    result = weldseam("plan", groove_ply, "--camera-origin", CAMERA, "--crop=-0.05,-0.1,-0.1,0.05,0.1,0.1", "-o", out)
+    assert result.returncode == 0, result.stderr
+    x = np.loadtxt(out, delimiter=",", skiprows=1)[:, 1]
+    assert x.min() >= -0.051 and x.max() <= 0.051 and np.ptp(x) > 0.09
+    bad = weldseam("plan", groove_ply, "--crop=0.1,0,0,0,1,1", "-o", tmp_path / "bad.csv")
+    assert bad.returncode == 2
+    one_error_line(bad, "--crop")

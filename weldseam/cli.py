@@ -104,6 +104,9 @@ def plan(
     cloud_frame: Annotated[str, typer.Option(help="Frame of a cloud file: base or camera.")] = "base",
     camera_origin: Annotated[Optional[str], typer.Option(help="Camera centre x,y,z in the base frame (m), to orient normals.")] = None,
     units: Annotated[str, typer.Option(help="Units of a cloud file: m or mm.")] = "m",
+    crop: Annotated[
+        Optional[str], typer.Option(help="Keep only points in the box x0,y0,z0,x1,y1,z1 (base frame, m).")
+    ] = None,
     threshold: Annotated[Optional[float], typer.Option(help="Descriptor threshold (default: automatic).")] = None,
     spacing_mm: Annotated[Optional[float], typer.Option(help="Pose spacing along the seam, mm (default 2).")] = None,
     settings: Annotated[
@@ -116,6 +119,8 @@ def plan(
 ) -> None:
     """Find the weld seams in a scan and write the ordered torch path."""
     with _reported():
+        import numpy as np
+
         from weldseam.config import PlanConfig, with_overrides
         from weldseam.io.clouds import write_ply
         from weldseam.io.paths import write_paths
@@ -130,6 +135,11 @@ def plan(
             if spacing_mm <= 0:
                 raise InputError(f"--spacing-mm must be positive, got {spacing_mm:g}")
             overrides.setdefault("resample", {})["spacing_m"] = spacing_mm / 1000.0
+        if crop is not None:
+            box = parse_vector(crop, 6, "--crop")
+            if np.any(box[:3] >= box[3:]):
+                raise InputError(f"--crop: each lower corner value must be below the upper one, got {crop}")
+            overrides.setdefault("condition", {}).update(crop_min_m=box[:3].tolist(), crop_max_m=box[3:].tolist())
         config = with_overrides(PlanConfig(), overrides)
         origin = parse_vector(camera_origin, 3, "--camera-origin") if camera_origin else None
         started = time.perf_counter()
@@ -145,12 +155,25 @@ def plan(
             def dump(stage: str, points, values) -> None:
                 write_ply(dump_stages / f"{next(counter):02d}_{stage}.ply", points, values=values)
 
-        result = plan_paths(loaded, config, dump=dump, allow_empty=allow_empty)
+        with _progress(enabled=not quiet) as on_stage:
+            result = plan_paths(loaded, config, dump=dump, on_stage=on_stage, allow_empty=allow_empty)
         write_paths(result, output, fmt=fmt, rotation=rotation)
         if not quiet:
             for message in [*notes, *result.warnings]:
                 _stderr(f"Warning: {message}")
             _report(result, output, time.perf_counter() - started, verbose)
+
+
+@contextmanager
+def _progress(enabled: bool):
+    """A spinner naming the running stage, on a terminal only (pipes and CI get none)."""
+    if not (enabled and sys.stderr.isatty()):
+        yield None
+        return
+    from rich.console import Console
+
+    with Console(stderr=True).status("planning") as status:
+        yield lambda stage: status.update(f"planning: {stage}")
 
 
 def _report(result, output: str, seconds: float, verbose: bool) -> None:
