@@ -119,8 +119,6 @@ def plan(
 ) -> None:
     """Find the weld seams in a scan and write the ordered torch path."""
     with _reported():
-        import numpy as np
-
         from weldseam.config import PlanConfig, with_overrides
         from weldseam.io.clouds import write_ply
         from weldseam.io.paths import write_paths
@@ -137,7 +135,7 @@ def plan(
             overrides.setdefault("resample", {})["spacing_m"] = spacing_mm / 1000.0
         if crop is not None:
             box = parse_vector(crop, 6, "--crop")
-            if np.any(box[:3] >= box[3:]):
+            if (box[:3] >= box[3:]).any():
                 raise InputError(f"--crop: each lower corner value must be below the upper one, got {crop}")
             overrides.setdefault("condition", {}).update(crop_min_m=box[:3].tolist(), crop_max_m=box[3:].tolist())
         config = with_overrides(PlanConfig(), overrides)
