@@ -42,3 +42,16 @@ def rotation_vectors(rotations: np.ndarray) -> np.ndarray:
 def transform_points(matrix: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Apply a 4x4 homogeneous transform to (N, 3) points."""
     return points @ matrix[:3, :3].T + matrix[:3, 3]
+
+
+def arc_lengths(points: np.ndarray, closed: bool = False) -> np.ndarray:
+    """Cumulative arc length (m) at each point of a polyline, starting at 0; a closed one
+    gets one more entry, the full length back to the first point."""
+    if closed:
+        points = np.vstack([points, points[:1]])
+    return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
+
+
+def polyline_length(points: np.ndarray, closed: bool = False) -> float:
+    """Length (m) of a polyline, including the closing segment of a loop."""
+    return float(arc_lengths(points, closed)[-1]) if len(points) else 0.0

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from weldseam.errors import InputError
+from weldseam.geometry import polyline_length
 
 
 def as_points(array, name: str = "points") -> np.ndarray:
@@ -72,12 +73,7 @@ class WeldPath:
     @property
     def length_m(self) -> float:
         """Arc length along the poses (including the closing segment of a loop)."""
-        points = self.positions_m
-        if len(points) < 2:
-            return 0.0
-        if self.closed:
-            points = np.vstack([points, points[:1]])
-        return float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
+        return polyline_length(self.positions_m, self.closed)
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from weldseam.geometry import unit
+from weldseam.geometry import polyline_length, unit
 from weldseam.pipeline.section import FILLET
 from weldseam.pipeline.trace import END_BASELINE_M, TracedSeam, end_direction, extend_seam, seam_length
 
@@ -145,12 +145,12 @@ def _joined(
                 continue
             out_a, out_b = end_direction(a, at_start=False), end_direction(b, at_start=True)
             # A piece shorter than the direction baseline has no direction of its own.
-            facing = _length(b) < END_BASELINE_M or _length(a) < END_BASELINE_M or -out_a @ out_b >= cos_turn
+            facing = polyline_length(b) < END_BASELINE_M or polyline_length(a) < END_BASELINE_M or -out_a @ out_b >= cos_turn
             # Through a bend the gap runs along the mean of the two directions; a piece too
             # short to have a direction defers to the other.
-            if _length(a) < END_BASELINE_M:
+            if polyline_length(a) < END_BASELINE_M:
                 reference = -out_b
-            elif _length(b) < END_BASELINE_M:
+            elif polyline_length(b) < END_BASELINE_M:
                 reference = out_a
             else:
                 reference = unit(out_a - out_b)
@@ -169,8 +169,6 @@ def _joined(
             ))
     return best
 
-def _length(points: np.ndarray) -> float:
-    return float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
 
 def split_at_junctions(seams: list[TracedSeam], *, tolerance_m: float) -> list[TracedSeam]:
     """Split a seam where another seam ends on its interior (a T or Y junction): each
@@ -203,7 +201,7 @@ def _junction(point: np.ndarray, others: list[TracedSeam], join_m: float) -> boo
     return any(
         min(np.linalg.norm(other.positions_m[0] - point), np.linalg.norm(other.positions_m[-1] - point)) <= join_m
         for other in others
-        if not other.closed and _length(other.positions_m) >= END_BASELINE_M
+        if not other.closed and polyline_length(other.positions_m) >= END_BASELINE_M
     )
 
 def _closed_if_ends_meet(seam: TracedSeam, join_m: float, cos_turn: float) -> TracedSeam:

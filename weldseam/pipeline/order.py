@@ -9,6 +9,8 @@ from scipy import sparse
 from scipy.sparse.csgraph import minimum_spanning_tree
 from scipy.spatial import cKDTree
 
+from weldseam.geometry import polyline_length
+
 
 @dataclass(frozen=True)
 class Chain:
@@ -38,7 +40,7 @@ def order_chains(points: np.ndarray, *, link_m: float, min_branch_m: float) -> l
         closed = (
             len(nodes) >= 4
             and np.linalg.norm(chain_points[0] - chain_points[-1]) <= link_m
-            and _length(chain_points) > 4 * link_m
+            and polyline_length(chain_points) > 4 * link_m
         )
         if not closed and _key(chain_points[-1]) < _key(chain_points[0]):
             chain_points = chain_points[::-1]
@@ -47,12 +49,13 @@ def order_chains(points: np.ndarray, *, link_m: float, min_branch_m: float) -> l
 
 
 def _spanning_tree(points: np.ndarray, link_m: float) -> dict[int, set[int]]:
-    distances = cKDTree(points).sparse_distance_matrix(cKDTree(points), link_m, output_type="coo_matrix")
+    tree = cKDTree(points)
+    distances = tree.sparse_distance_matrix(tree, link_m, output_type="coo_matrix")
     # Coincident points would have weight 0, which the MST routine reads as "no edge".
     weights = sparse.coo_matrix((distances.data + 1e-12, (distances.row, distances.col)), shape=distances.shape)
-    tree = minimum_spanning_tree(weights.tocsr()).tocoo()
+    spanning = minimum_spanning_tree(weights.tocsr()).tocoo()
     adjacency: dict[int, set[int]] = {i: set() for i in range(len(points))}
-    for a, b in zip(tree.row.tolist(), tree.col.tolist()):
+    for a, b in zip(spanning.row.tolist(), spanning.col.tolist()):
         adjacency[a].add(b)
         adjacency[b].add(a)
     return adjacency
@@ -100,10 +103,6 @@ def _branches(adjacency: dict[int, set[int]]) -> list[list[int]]:
                 run.append(following)
             branches.append(run)
     return branches
-
-
-def _length(points: np.ndarray) -> float:
-    return float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
 
 
 def _key(point: np.ndarray) -> tuple[float, float, float]:

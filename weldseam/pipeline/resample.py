@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from weldseam.geometry import frames_from_axes, unit
+from weldseam.geometry import arc_lengths, frames_from_axes, unit
 
 
 def resample_seam(
@@ -18,7 +18,7 @@ def resample_seam(
     linear interpolation (slerp to 1e-4 rad for neighbouring axes within 10 degrees). Frame
     y is the travel direction of the resampled line, z the torch axis, x = y cross z.
     """
-    arc = _arc_lengths(positions, closed)
+    arc = arc_lengths(positions, closed)
     total = arc[-1]
     if closed:
         positions = np.vstack([positions, positions[:1]])
@@ -33,11 +33,6 @@ def resample_seam(
     else:
         travel = np.gradient(new_positions, axis=0)
     return new_positions, frames_from_axes(new_axes, travel)
-
-
-def _arc_lengths(positions: np.ndarray, closed: bool) -> np.ndarray:
-    points = np.vstack([positions, positions[:1]]) if closed else positions
-    return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
 
 
 def _smooth(positions, axes, arc, sigma_m, period):

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from weldseam.geometry import unit
+from weldseam.geometry import arc_lengths, polyline_length, unit
 from weldseam.pipeline.order import Chain
 from weldseam.pipeline.section import analyse_sections, section_frames
 
@@ -112,7 +112,7 @@ def end_direction(points: np.ndarray, at_start: bool) -> np.ndarray:
     """Outward unit direction at one end: the principal direction of the points within
     ~12 mm of arc from the end, pointing out (the last few points alone are too noisy)."""
     ordered = points if at_start else points[::-1]
-    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(ordered, axis=0), axis=1))])
+    arc = arc_lengths(ordered)
     k = max(1, min(int(np.searchsorted(arc, END_BASELINE_M)), len(ordered) - 1))
     chord = ordered[0] - ordered[k]
     window = ordered[: k + 1] - ordered[: k + 1].mean(axis=0)
@@ -174,7 +174,6 @@ def extend_seam(
 
 def seam_length(seam: TracedSeam) -> float:
     """Arc length (m), including the closing segment of a loop."""
-    points = np.vstack([seam.positions_m, seam.positions_m[:1]]) if seam.closed else seam.positions_m
-    return float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
+    return polyline_length(seam.positions_m, seam.closed)
 
 
