@@ -71,22 +71,27 @@ def trim_overlaps(seams: list[TracedSeam], *, tolerance_m: float) -> list[Traced
     little further than the others. Longest first, every seam loses the points within
     `tolerance_m` of a seam already kept; what remains (possibly several runs) is kept."""
     kept: list[TracedSeam] = []
+    # One tree per kept seam, over its polyline rather than its points: a joined seam may
+    # bridge a gap.
+    kept_trees: list[cKDTree] = []
+
+    def keep(piece: TracedSeam) -> None:
+        kept.append(piece)
+        kept_trees.append(cKDTree(_densified(piece.positions_m, piece.closed, tolerance_m / 2)))
+
     for seam in sorted(seams, key=lambda s: (-seam_length(s), tuple(s.positions_m[0]))):
         covered = np.zeros(len(seam.positions_m), bool)
-        for other in kept:
-            # Against the polyline, not just its points: a joined seam may bridge a gap.
-            dense = _densified(other.positions_m, other.closed, tolerance_m / 2)
-            covered |= cKDTree(dense).query(seam.positions_m)[0] <= tolerance_m
+        for tree in kept_trees:
+            covered |= tree.query(seam.positions_m)[0] <= tolerance_m
         if not covered.any():
-            kept.append(seam)
+            keep(seam)
             continue
         runs = np.split(np.flatnonzero(~covered), np.flatnonzero(np.diff(np.flatnonzero(~covered)) > 1) + 1)
-        kept += [
-            TracedSeam(seam.positions_m[run], seam.torch_axes[run], False, seam.joint, seam.confidence)
-            for run in runs
-            if len(run) >= 2
-        ]
+        for run in runs:
+            if len(run) >= 2:
+                keep(TracedSeam(seam.positions_m[run], seam.torch_axes[run], False, seam.joint, seam.confidence))
     return kept
+
 
 def _densified(points: np.ndarray, closed: bool, step_m: float) -> np.ndarray:
     """Points along the polyline through `points`, no more than `step_m` apart."""
