@@ -1,31 +1,14 @@
-"""The `weldseam` command line: parse, call the library, report. No geometry here."""
+"""The `weldseam` command line: the Typer app and its commands (each in `weldseam/commands/`)."""
 
 from __future__ import annotations
 
-import sys
-import time
-import tomllib
-from contextlib import contextmanager
-from pathlib import Path
 from typing import Annotated, Optional
 
 import typer
 
 from weldseam import __version__
-from weldseam.errors import InputError, NoSeamError, RobotFault, StageError, UnreachableError, WeldseamError
-
-EXIT_CODES = (
-    (0, "success"),
-    (1, "differences found (compare) or some batch items failed"),
-    (2, "usage error, or unreadable / invalid input"),
-    (3, "no weld seam found"),
-    (4, "a pose is unreachable (refused before any motion)"),
-    (5, "robot fault (the robot was stopped)"),
-    (70, "internal error (a bug: please report it with the input)"),
-    (130, "interrupted (Ctrl-C)"),
-)
-_EXIT_FOR = ((InputError, 2), (NoSeamError, 3), (UnreachableError, 4), (RobotFault, 5), (StageError, 70))
-_EXIT_TABLE = "\n\n".join(f"{code}: {meaning}" for code, meaning in EXIT_CODES)
+from weldseam.commands import plan
+from weldseam.commands.common import EXIT_TABLE
 
 app = typer.Typer(
     name="weldseam",
@@ -33,42 +16,9 @@ app = typer.Typer(
     no_args_is_help=True,
     add_completion=False,
     rich_markup_mode=None,
-    epilog=f"Exit codes:\n\n{_EXIT_TABLE}",
+    epilog=f"Exit codes:\n\n{EXIT_TABLE}",
 )
-
-
-def _stderr(message: str) -> None:
-    print(message, file=sys.stderr, flush=True)
-
-
-@contextmanager
-def _reported():
-    """Turn library exceptions into one `Error: ...` line on stderr and the documented exit code."""
-    try:
-        yield
-    except WeldseamError as error:
-        _stderr(f"Error: {error}")
-        code = next((code for kind, code in _EXIT_FOR if isinstance(error, kind)), 70)
-        raise typer.Exit(code) from None
-    except KeyboardInterrupt:
-        _stderr("Error: interrupted")
-        raise typer.Exit(130) from None
-
-
-def _overrides(settings: list[str]) -> dict[str, dict]:
-    """Parse `section.key=value` (value in TOML syntax: 0.004, true, "thesis", [0, 0, 0])."""
-    overrides: dict[str, dict] = {}
-    for setting in settings:
-        name, separator, text = setting.partition("=")
-        section, dot, key = name.strip().partition(".")
-        if not separator or not dot or not key:
-            raise InputError(f"--set {setting!r}: expected section.key=value, e.g. normals.radius_m=0.008")
-        try:
-            value = tomllib.loads(f"value = {text.strip()}")["value"]
-        except tomllib.TOMLDecodeError:
-            value = text.strip()
-        overrides.setdefault(section, {})[key] = value
-    return overrides
+app.command("plan", epilog=plan.EPILOG)(plan.plan)
 
 
 def _version(value: bool) -> None:
@@ -80,111 +30,16 @@ def _version(value: bool) -> None:
 @app.callback()
 def _main(
     version: Annotated[
-        Optional[bool], typer.Option("--version", callback=_version, is_eager=True, help="Print the version and exit.")
+        Optional[bool],
+        typer.Option(
+            "--version",
+            callback=_version,
+            is_eager=True,
+            help="Print the version and exit.",
+        ),
     ] = None,
 ) -> None:
     """Turn a 3D scan of a grooved workpiece into an ordered 6-DOF robot welding path."""
-
-
-@app.command(
-    epilog=(
-        "Example:\n\n"
-        "  weldseam plan samples/v_butt.ply --camera-origin 0.02,-0.1,0.45 -o path.json\n\n"
-        "  weldseam plan depth.png --intrinsics d415.json --camera-pose pose.json -o - --format csv\n\n"
-        f"Exit codes:\n\n{_EXIT_TABLE}"
-    )
-)
-def plan(
-    scan: Annotated[str, typer.Argument(help="Scan: .ply .pcd .xyz .txt .npy, a 16-bit depth .png, or - (PLY on stdin).")],
-    output: Annotated[str, typer.Option("--output", "-o", help="Path file (.json or .csv), or - for stdout.")] = "-",
-    fmt: Annotated[Optional[str], typer.Option("--format", help="json or csv (default: from the extension; csv on stdout).")] = None,
-    rotation: Annotated[str, typer.Option(help="CSV rotation columns: rotvec (UR rx,ry,rz) or quat.")] = "rotvec",
-    intrinsics: Annotated[Optional[str], typer.Option(help="Intrinsics JSON for a depth image.")] = None,
-    camera_pose: Annotated[Optional[str], typer.Option(help='JSON {"T_base_camera": 4x4 row-major}.')] = None,
-    cloud_frame: Annotated[str, typer.Option(help="Frame of a cloud file: base or camera.")] = "base",
-    camera_origin: Annotated[Optional[str], typer.Option(help="Camera centre x,y,z in the base frame (m), to orient normals.")] = None,
-    units: Annotated[str, typer.Option(help="Units of a cloud file: m or mm.")] = "m",
-    crop: Annotated[
-        Optional[str], typer.Option(help="Keep only points in the box x0,y0,z0,x1,y1,z1 (base frame, m).")
-    ] = None,
-    threshold: Annotated[Optional[float], typer.Option(help="Descriptor threshold (default: automatic).")] = None,
-    spacing_mm: Annotated[Optional[float], typer.Option(help="Pose spacing along the seam, mm (default 2).")] = None,
-    settings: Annotated[
-        Optional[list[str]], typer.Option("--set", help="Override a parameter: section.key=value (repeatable).")
-    ] = None,
-    allow_empty: Annotated[bool, typer.Option(help="No seam found: write an empty path and exit 0.")] = False,
-    dump_stages: Annotated[Optional[Path], typer.Option(help="Write each stage's points as PLY into this folder.")] = None,
-    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No messages on stderr except errors.")] = False,
-    verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Per-stage timings on stderr.")] = False,
-) -> None:
-    """Find the weld seams in a scan and write the ordered torch path."""
-    with _reported():
-        from weldseam.config import PlanConfig, with_overrides
-        from weldseam.io.clouds import write_ply
-        from weldseam.io.paths import write_paths
-        from weldseam.io.poses import parse_vector
-        from weldseam.io.scan import load_scan
-        from weldseam.pipeline.run import plan_paths
-
-        overrides = _overrides(settings or [])
-        if threshold is not None:
-            overrides.setdefault("segment", {})["threshold"] = threshold
-        if spacing_mm is not None:
-            if spacing_mm <= 0:
-                raise InputError(f"--spacing-mm must be positive, got {spacing_mm:g}")
-            overrides.setdefault("resample", {})["spacing_m"] = spacing_mm / 1000.0
-        if crop is not None:
-            box = parse_vector(crop, 6, "--crop")
-            if (box[:3] >= box[3:]).any():
-                raise InputError(f"--crop: each lower corner value must be below the upper one, got {crop}")
-            overrides.setdefault("condition", {}).update(crop_min_m=box[:3].tolist(), crop_max_m=box[3:].tolist())
-        config = with_overrides(PlanConfig(), overrides)
-        origin = parse_vector(camera_origin, 3, "--camera-origin") if camera_origin else None
-        started = time.perf_counter()
-        loaded, notes = load_scan(
-            scan, intrinsics_path=intrinsics, camera_pose_path=camera_pose, cloud_frame=cloud_frame,
-            camera_origin_m=origin, units=units,
-        )
-        dump = None
-        if dump_stages is not None:
-            dump_stages.mkdir(parents=True, exist_ok=True)
-            counter = iter(range(100))
-
-            def dump(stage: str, points, values) -> None:
-                write_ply(dump_stages / f"{next(counter):02d}_{stage}.ply", points, values=values)
-
-        with _progress(enabled=not quiet) as on_stage:
-            result = plan_paths(loaded, config, dump=dump, on_stage=on_stage, allow_empty=allow_empty)
-        write_paths(result, output, fmt=fmt, rotation=rotation)
-        if not quiet:
-            for message in [*notes, *result.warnings]:
-                _stderr(f"Warning: {message}")
-            _report(result, output, time.perf_counter() - started, verbose)
-
-
-@contextmanager
-def _progress(enabled: bool):
-    """A spinner naming the running stage, on a terminal only (pipes and CI get none)."""
-    if not (enabled and sys.stderr.isatty()):
-        yield None
-        return
-    from rich.console import Console
-
-    with Console(stderr=True).status("planning") as status:
-        yield lambda stage: status.update(f"planning: {stage}")
-
-
-def _report(result, output: str, seconds: float, verbose: bool) -> None:
-    if verbose:
-        for name, spent in result.timings_s.items():
-            _stderr(f"  {name:<11} {spent * 1000:8.1f} ms")
-    for path in result.paths:
-        _stderr(
-            f"seam {path.seam_id}: {path.joint}, {'closed, ' if path.closed else ''}{path.length_m * 1000:.1f} mm, "
-            f"{len(path.positions_m)} poses, confidence {path.confidence:.2f}"
-        )
-    target = "stdout" if output == "-" else output
-    _stderr(f"{len(result.paths)} seam(s) in {seconds:.2f} s -> {target}")
 
 
 def main() -> None:

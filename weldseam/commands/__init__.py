@@ -1,0 +1,1 @@
+"""One module per `weldseam` command; `cli.py` registers them. Heavy imports stay inside the commands."""

@@ -1,0 +1,178 @@
+"""`weldseam plan`: one scan in, the ordered torch path out."""
+
+from __future__ import annotations
+
+import sys
+import time
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Annotated, Optional
+
+import typer
+
+from weldseam.commands.common import EXIT_TABLE, parse_settings, reported, stderr
+from weldseam.errors import InputError
+
+EPILOG = (
+    "Example:\n\n"
+    "  weldseam plan samples/v_butt.ply --camera-origin 0.02,-0.1,0.45 -o path.json\n\n"
+    "  weldseam plan depth.png --intrinsics d415.json --camera-pose pose.json -o - --format csv\n\n"
+    f"Exit codes:\n\n{EXIT_TABLE}"
+)
+
+
+def plan(
+    scan: Annotated[
+        str,
+        typer.Argument(
+            help="Scan: .ply .pcd .xyz .txt .npy, a 16-bit depth .png, or - (PLY on stdin)."
+        ),
+    ],
+    output: Annotated[
+        str,
+        typer.Option(
+            "--output", "-o", help="Path file (.json or .csv), or - for stdout."
+        ),
+    ] = "-",
+    fmt: Annotated[
+        Optional[str],
+        typer.Option(
+            "--format", help="json or csv (default: from the extension; csv on stdout)."
+        ),
+    ] = None,
+    rotation: Annotated[
+        str, typer.Option(help="CSV rotation columns: rotvec (UR rx,ry,rz) or quat.")
+    ] = "rotvec",
+    intrinsics: Annotated[
+        Optional[str], typer.Option(help="Intrinsics JSON for a depth image.")
+    ] = None,
+    camera_pose: Annotated[
+        Optional[str], typer.Option(help='JSON {"T_base_camera": 4x4 row-major}.')
+    ] = None,
+    cloud_frame: Annotated[
+        str, typer.Option(help="Frame of a cloud file: base or camera.")
+    ] = "base",
+    camera_origin: Annotated[
+        Optional[str],
+        typer.Option(
+            help="Camera centre x,y,z in the base frame (m), to orient normals."
+        ),
+    ] = None,
+    units: Annotated[str, typer.Option(help="Units of a cloud file: m or mm.")] = "m",
+    crop: Annotated[
+        Optional[str],
+        typer.Option(
+            help="Keep only points in the box x0,y0,z0,x1,y1,z1 (base frame, m)."
+        ),
+    ] = None,
+    threshold: Annotated[
+        Optional[float], typer.Option(help="Descriptor threshold (default: automatic).")
+    ] = None,
+    spacing_mm: Annotated[
+        Optional[float],
+        typer.Option(help="Pose spacing along the seam, mm (default 2)."),
+    ] = None,
+    settings: Annotated[
+        Optional[list[str]],
+        typer.Option(
+            "--set", help="Override a parameter: section.key=value (repeatable)."
+        ),
+    ] = None,
+    allow_empty: Annotated[
+        bool, typer.Option(help="No seam found: write an empty path and exit 0.")
+    ] = False,
+    dump_stages: Annotated[
+        Optional[Path],
+        typer.Option(help="Write each stage's points as PLY into this folder."),
+    ] = None,
+    quiet: Annotated[
+        bool, typer.Option("--quiet", "-q", help="No messages on stderr except errors.")
+    ] = False,
+    verbose: Annotated[
+        bool, typer.Option("--verbose", "-v", help="Per-stage timings on stderr.")
+    ] = False,
+) -> None:
+    """Find the weld seams in a scan and write the ordered torch path."""
+    with reported():
+        from weldseam.config import PlanConfig, with_overrides
+        from weldseam.io.clouds import write_ply
+        from weldseam.io.paths import write_paths
+        from weldseam.io.poses import parse_vector
+        from weldseam.io.scan import load_scan
+        from weldseam.pipeline.run import plan_paths
+
+        overrides = parse_settings(settings or [])
+        if threshold is not None:
+            overrides.setdefault("segment", {})["threshold"] = threshold
+        if spacing_mm is not None:
+            if spacing_mm <= 0:
+                raise InputError(f"--spacing-mm must be positive, got {spacing_mm:g}")
+            overrides.setdefault("resample", {})["spacing_m"] = spacing_mm / 1000.0
+        if crop is not None:
+            box = parse_vector(crop, 6, "--crop")
+            if (box[:3] >= box[3:]).any():
+                raise InputError(
+                    f"--crop: each lower corner value must be below the upper one, got {crop}"
+                )
+            overrides.setdefault("condition", {}).update(
+                crop_min_m=box[:3].tolist(), crop_max_m=box[3:].tolist()
+            )
+        config = with_overrides(PlanConfig(), overrides)
+        origin = (
+            parse_vector(camera_origin, 3, "--camera-origin") if camera_origin else None
+        )
+        started = time.perf_counter()
+        loaded, notes = load_scan(
+            scan,
+            intrinsics_path=intrinsics,
+            camera_pose_path=camera_pose,
+            cloud_frame=cloud_frame,
+            camera_origin_m=origin,
+            units=units,
+        )
+        dump = None
+        if dump_stages is not None:
+            dump_stages.mkdir(parents=True, exist_ok=True)
+            counter = iter(range(100))
+
+            def dump(stage: str, points, values) -> None:
+                write_ply(
+                    dump_stages / f"{next(counter):02d}_{stage}.ply",
+                    points,
+                    values=values,
+                )
+
+        with _progress(enabled=not quiet) as on_stage:
+            result = plan_paths(
+                loaded, config, dump=dump, on_stage=on_stage, allow_empty=allow_empty
+            )
+        write_paths(result, output, fmt=fmt, rotation=rotation)
+        if not quiet:
+            for message in [*notes, *result.warnings]:
+                stderr(f"Warning: {message}")
+            _report(result, output, time.perf_counter() - started, verbose)
+
+
+@contextmanager
+def _progress(enabled: bool):
+    """A spinner naming the running stage, on a terminal only (pipes and CI get none)."""
+    if not (enabled and sys.stderr.isatty()):
+        yield None
+        return
+    from rich.console import Console
+
+    with Console(stderr=True).status("planning") as status:
+        yield lambda stage: status.update(f"planning: {stage}")
+
+
+def _report(result, output: str, seconds: float, verbose: bool) -> None:
+    if verbose:
+        for name, spent in result.timings_s.items():
+            stderr(f"  {name:<11} {spent * 1000:8.1f} ms")
+    for path in result.paths:
+        stderr(
+            f"seam {path.seam_id}: {path.joint}, {'closed, ' if path.closed else ''}{path.length_m * 1000:.1f} mm, "
+            f"{len(path.positions_m)} poses, confidence {path.confidence:.2f}"
+        )
+    target = "stdout" if output == "-" else output
+    stderr(f"{len(result.paths)} seam(s) in {seconds:.2f} s -> {target}")
