@@ -62,9 +62,7 @@ def parse_settings(settings: list[str]) -> dict[str, dict]:
         name, separator, text = setting.partition("=")
         section, dot, key = name.strip().partition(".")
         if not separator or not dot or not key:
-            raise InputError(
-                f"--set {setting!r}: expected section.key=value, e.g. normals.radius_m=0.008"
-            )
+            raise InputError(f"--set {setting!r}: expected section.key=value, e.g. normals.radius_m=0.008")
         try:
             value = tomllib.loads(f"value = {text.strip()}")["value"]
         except tomllib.TOMLDecodeError:

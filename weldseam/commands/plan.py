@@ -24,73 +24,45 @@ EPILOG = (
 def plan(
     scan: Annotated[
         str,
-        typer.Argument(
-            help="Scan: .ply .pcd .xyz .txt .npy, a 16-bit depth .png, or - (PLY on stdin)."
-        ),
+        typer.Argument(help="Scan: .ply .pcd .xyz .txt .npy, a 16-bit depth .png, or - (PLY on stdin)."),
     ],
     output: Annotated[
         str,
-        typer.Option(
-            "--output", "-o", help="Path file (.json or .csv), or - for stdout."
-        ),
+        typer.Option("--output", "-o", help="Path file (.json or .csv), or - for stdout."),
     ] = "-",
     fmt: Annotated[
         Optional[str],
-        typer.Option(
-            "--format", help="json or csv (default: from the extension; csv on stdout)."
-        ),
+        typer.Option("--format", help="json or csv (default: from the extension; csv on stdout)."),
     ] = None,
-    rotation: Annotated[
-        str, typer.Option(help="CSV rotation columns: rotvec (UR rx,ry,rz) or quat.")
-    ] = "rotvec",
-    intrinsics: Annotated[
-        Optional[str], typer.Option(help="Intrinsics JSON for a depth image.")
-    ] = None,
-    camera_pose: Annotated[
-        Optional[str], typer.Option(help='JSON {"T_base_camera": 4x4 row-major}.')
-    ] = None,
-    cloud_frame: Annotated[
-        str, typer.Option(help="Frame of a cloud file: base or camera.")
-    ] = "base",
+    rotation: Annotated[str, typer.Option(help="CSV rotation columns: rotvec (UR rx,ry,rz) or quat.")] = "rotvec",
+    intrinsics: Annotated[Optional[str], typer.Option(help="Intrinsics JSON for a depth image.")] = None,
+    camera_pose: Annotated[Optional[str], typer.Option(help='JSON {"T_base_camera": 4x4 row-major}.')] = None,
+    cloud_frame: Annotated[str, typer.Option(help="Frame of a cloud file: base or camera.")] = "base",
     camera_origin: Annotated[
         Optional[str],
-        typer.Option(
-            help="Camera centre x,y,z in the base frame (m), to orient normals."
-        ),
+        typer.Option(help="Camera centre x,y,z in the base frame (m), to orient normals."),
     ] = None,
     units: Annotated[str, typer.Option(help="Units of a cloud file: m or mm.")] = "m",
     crop: Annotated[
         Optional[str],
-        typer.Option(
-            help="Keep only points in the box x0,y0,z0,x1,y1,z1 (base frame, m)."
-        ),
+        typer.Option(help="Keep only points in the box x0,y0,z0,x1,y1,z1 (base frame, m)."),
     ] = None,
-    threshold: Annotated[
-        Optional[float], typer.Option(help="Descriptor threshold (default: automatic).")
-    ] = None,
+    threshold: Annotated[Optional[float], typer.Option(help="Descriptor threshold (default: automatic).")] = None,
     spacing_mm: Annotated[
         Optional[float],
         typer.Option(help="Pose spacing along the seam, mm (default 2)."),
     ] = None,
     settings: Annotated[
         Optional[list[str]],
-        typer.Option(
-            "--set", help="Override a parameter: section.key=value (repeatable)."
-        ),
+        typer.Option("--set", help="Override a parameter: section.key=value (repeatable)."),
     ] = None,
-    allow_empty: Annotated[
-        bool, typer.Option(help="No seam found: write an empty path and exit 0.")
-    ] = False,
+    allow_empty: Annotated[bool, typer.Option(help="No seam found: write an empty path and exit 0.")] = False,
     dump_stages: Annotated[
         Optional[Path],
         typer.Option(help="Write each stage's points as PLY into this folder."),
     ] = None,
-    quiet: Annotated[
-        bool, typer.Option("--quiet", "-q", help="No messages on stderr except errors.")
-    ] = False,
-    verbose: Annotated[
-        bool, typer.Option("--verbose", "-v", help="Per-stage timings on stderr.")
-    ] = False,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No messages on stderr except errors.")] = False,
+    verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Per-stage timings on stderr.")] = False,
 ) -> None:
     """Find the weld seams in a scan and write the ordered torch path."""
     with reported():
@@ -111,16 +83,10 @@ def plan(
         if crop is not None:
             box = parse_vector(crop, 6, "--crop")
             if (box[:3] >= box[3:]).any():
-                raise InputError(
-                    f"--crop: each lower corner value must be below the upper one, got {crop}"
-                )
-            overrides.setdefault("condition", {}).update(
-                crop_min_m=box[:3].tolist(), crop_max_m=box[3:].tolist()
-            )
+                raise InputError(f"--crop: each lower corner value must be below the upper one, got {crop}")
+            overrides.setdefault("condition", {}).update(crop_min_m=box[:3].tolist(), crop_max_m=box[3:].tolist())
         config = with_overrides(PlanConfig(), overrides)
-        origin = (
-            parse_vector(camera_origin, 3, "--camera-origin") if camera_origin else None
-        )
+        origin = parse_vector(camera_origin, 3, "--camera-origin") if camera_origin else None
         started = time.perf_counter()
         loaded, notes = load_scan(
             scan,
@@ -143,9 +109,7 @@ def plan(
                 )
 
         with _progress(enabled=not quiet) as on_stage:
-            result = plan_paths(
-                loaded, config, dump=dump, on_stage=on_stage, allow_empty=allow_empty
-            )
+            result = plan_paths(loaded, config, dump=dump, on_stage=on_stage, allow_empty=allow_empty)
         write_paths(result, output, fmt=fmt, rotation=rotation)
         if not quiet:
             for message in [*notes, *result.warnings]:
