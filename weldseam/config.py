@@ -7,13 +7,16 @@ angles in degrees (`_deg`). The CLI options and the output record derive from th
 from __future__ import annotations
 
 import dataclasses
+import json
+import tomllib
 from dataclasses import dataclass, field, fields
+from pathlib import Path
 
 from weldseam.errors import InputError
 
 
-def _param(default, help_text: str):
-    return field(default=default, metadata={"help": help_text})
+def _param(default, help_text: str, choices: tuple[str, ...] = ()):
+    return field(default=default, metadata={"help": help_text, "choices": choices})
 
 
 @dataclass(frozen=True)
@@ -47,7 +50,9 @@ class NormalsConfig:
 
 @dataclass(frozen=True)
 class DescriptorConfig:
-    variant: str = _param("released", "'released' (variance of cosines) or 'thesis' (angles, global term)")
+    variant: str = _param(
+        "released", "'released' (variance of cosines) or 'thesis' (angles, global term)", ("released", "thesis")
+    )
     radius_m: float = _param(0.006, "neighbourhood radius of the gradient descriptor")
 
 
@@ -116,6 +121,16 @@ class ResampleConfig:
 
 
 @dataclass(frozen=True)
+class OutputConfig:
+    format: str = _param(
+        "auto", "path file format: auto (from the extension; csv on stdout), json or csv", ("auto", "json", "csv")
+    )
+    rotation: str = _param(
+        "rotvec", "CSV rotation columns: rotvec (UR rx,ry,rz) or quat (qx,qy,qz,qw)", ("rotvec", "quat")
+    )
+
+
+@dataclass(frozen=True)
 class PlanConfig:
     condition: ConditionConfig = field(default_factory=ConditionConfig)
     smooth: SmoothConfig = field(default_factory=SmoothConfig)
@@ -129,6 +144,7 @@ class PlanConfig:
     order: OrderConfig = field(default_factory=OrderConfig)
     section: SectionConfig = field(default_factory=SectionConfig)
     resample: ResampleConfig = field(default_factory=ResampleConfig)
+    output: OutputConfig = field(default_factory=OutputConfig)
 
 
 def config_to_dict(config: PlanConfig) -> dict:
@@ -187,6 +203,72 @@ def _coerce(name: str, current, spec: dataclasses.Field, value):
         if isinstance(value, (int, float)) and not isinstance(value, bool):
             return float(value)
         raise InputError(f"{name} must be a number, got {value!r}")
-    if isinstance(value, str):
-        return value
-    raise InputError(f"{name} must be text, got {value!r}")
+    if not isinstance(value, str):
+        raise InputError(f"{name} must be text, got {value!r}")
+    choices = spec.metadata["choices"]
+    if choices and value not in choices:
+        raise InputError(f"{name} must be one of {', '.join(choices)}, got {value!r}")
+    return value
+
+
+def read_config_file(path: str | Path) -> dict[str, dict]:
+    """Overrides `{section: {key: value}}` from a TOML config file, or from the `params` of a
+    weldseam JSON path file (so a run can be reproduced from its output). Every key is checked
+    against the defaults; errors name the file and `section.key`."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise InputError(f"{path}: config file not found") from None
+    except (OSError, UnicodeDecodeError) as error:
+        raise InputError(f"{path}: cannot read the config file ({error})") from None
+    if path.suffix.lower() == ".json":
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as error:
+            raise InputError(f"{path}: not valid JSON (line {error.lineno}: {error.msg})") from None
+        data = data.get("params", data) if isinstance(data, dict) else data
+    else:
+        try:
+            data = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as error:
+            raise InputError(f"{path}: not valid TOML ({error})") from None
+    if not isinstance(data, dict) or not all(isinstance(values, dict) for values in data.values()):
+        raise InputError(f"{path}: expected [section] tables of key = value, e.g. [normals] radius_m = 0.008")
+    try:
+        with_overrides(PlanConfig(), data)
+    except InputError as error:
+        raise InputError(f"{path}: {error}") from None
+    return data
+
+
+def effective_config(config_file: str | Path | None, overrides: dict[str, dict]) -> PlanConfig:
+    """Defaults, then the config file, then command-line overrides (the last one wins)."""
+    config = PlanConfig()
+    if config_file is not None:
+        config = with_overrides(config, read_config_file(config_file))
+    return with_overrides(config, overrides)
+
+
+def config_to_toml(config: PlanConfig) -> str:
+    """The whole config as TOML, each key with its help as a comment; unset optional keys are
+    written commented out (TOML has no null), so the text reads back to the same config."""
+    lines = ["# weldseam configuration: use with --config FILE; command-line options override it."]
+    for section_field in fields(config):
+        section = getattr(config, section_field.name)
+        lines += ["", f"[{section_field.name}]"]
+        for spec in fields(section):
+            value = getattr(section, spec.name)
+            lines.append(f"# {spec.metadata['help']}")
+            lines.append(f"# {spec.name} =" if value is None else f"{spec.name} = {_toml_value(value)}")
+    return "\n".join(lines) + "\n"
+
+
+def _toml_value(value) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (int, float)):
+        return repr(value)
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml_value(item) for item in value) + "]"
+    return json.dumps(value)

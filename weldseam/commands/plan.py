@@ -34,7 +34,9 @@ def plan(
         Optional[str],
         typer.Option("--format", help="json or csv (default: from the extension; csv on stdout)."),
     ] = None,
-    rotation: Annotated[str, typer.Option(help="CSV rotation columns: rotvec (UR rx,ry,rz) or quat.")] = "rotvec",
+    rotation: Annotated[
+        Optional[str], typer.Option(help="CSV rotation columns: rotvec (UR rx,ry,rz, the default) or quat.")
+    ] = None,
     intrinsics: Annotated[Optional[str], typer.Option(help="Intrinsics JSON for a depth image.")] = None,
     camera_pose: Annotated[Optional[str], typer.Option(help='JSON {"T_base_camera": 4x4 row-major}.')] = None,
     cloud_frame: Annotated[str, typer.Option(help="Frame of a cloud file: base or camera.")] = "base",
@@ -52,6 +54,10 @@ def plan(
         Optional[float],
         typer.Option(help="Pose spacing along the seam, mm (default 2)."),
     ] = None,
+    config_file: Annotated[
+        Optional[str],
+        typer.Option("--config", help="TOML config file (see `weldseam config show`), or a path JSON to rerun."),
+    ] = None,
     settings: Annotated[
         Optional[list[str]],
         typer.Option("--set", help="Override a parameter: section.key=value (repeatable)."),
@@ -66,7 +72,7 @@ def plan(
 ) -> None:
     """Find the weld seams in a scan and write the ordered torch path."""
     with reported():
-        from weldseam.config import PlanConfig, with_overrides
+        from weldseam.config import effective_config
         from weldseam.io.clouds import write_ply
         from weldseam.io.paths import write_paths
         from weldseam.io.poses import parse_vector
@@ -74,6 +80,10 @@ def plan(
         from weldseam.pipeline.run import plan_paths
 
         overrides = parse_settings(settings or [])
+        if fmt is not None:
+            overrides.setdefault("output", {})["format"] = fmt
+        if rotation is not None:
+            overrides.setdefault("output", {})["rotation"] = rotation
         if threshold is not None:
             overrides.setdefault("segment", {})["threshold"] = threshold
         if spacing_mm is not None:
@@ -85,7 +95,7 @@ def plan(
             if (box[:3] >= box[3:]).any():
                 raise InputError(f"--crop: each lower corner value must be below the upper one, got {crop}")
             overrides.setdefault("condition", {}).update(crop_min_m=box[:3].tolist(), crop_max_m=box[3:].tolist())
-        config = with_overrides(PlanConfig(), overrides)
+        config = effective_config(config_file, overrides)
         origin = parse_vector(camera_origin, 3, "--camera-origin") if camera_origin else None
         started = time.perf_counter()
         loaded, notes = load_scan(
@@ -110,7 +120,12 @@ def plan(
 
         with _progress(enabled=not quiet) as on_stage:
             result = plan_paths(loaded, config, dump=dump, on_stage=on_stage, allow_empty=allow_empty)
-        write_paths(result, output, fmt=fmt, rotation=rotation)
+        write_paths(
+            result,
+            output,
+            fmt=None if config.output.format == "auto" else config.output.format,
+            rotation=config.output.rotation,
+        )
         if not quiet:
             for message in [*notes, *result.warnings]:
                 stderr(f"Warning: {message}")

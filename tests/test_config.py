@@ -1,0 +1,69 @@
+"""The configuration: one typed source of truth, TOML in and out, precedence, errors naming the key."""
+
+import json
+import tomllib
+
+import pytest
+
+from weldseam.config import PlanConfig, config_to_toml, effective_config, read_config_file, with_overrides
+from weldseam.errors import InputError
+
+
+def test_toml_of_a_config_reads_back_to_the_same_config():
+    changed = with_overrides(
+        PlanConfig(),
+        {
+            "normals": {"radius_m": 0.008},
+            "segment": {"threshold": 0.05},
+            "condition": {"crop_min_m": [0, -0.1, 0.0], "crop_max_m": [0.2, 0.1, 0.05]},
+            "smooth": {"enabled": False},
+            "output": {"rotation": "quat"},
+        },
+    )
+    for config in (PlanConfig(), changed):
+        assert with_overrides(PlanConfig(), tomllib.loads(config_to_toml(config))) == config
+
+
+def test_precedence_is_command_line_then_file_then_defaults(tmp_path):
+    file = tmp_path / "cell.toml"
+    file.write_text("[normals]\nradius_m = 0.008\n[thinning]\niterations = 12\n")
+    from_file = effective_config(file, {})
+    assert from_file.normals.radius_m == 0.008 and from_file.thinning.iterations == 12
+    assert from_file.descriptor == PlanConfig().descriptor
+    both = effective_config(file, {"normals": {"radius_m": 0.007}})
+    assert both.normals.radius_m == 0.007 and both.thinning.iterations == 12
+
+
+def test_a_path_json_is_a_config_that_reproduces_its_run(tmp_path):
+    config = with_overrides(PlanConfig(), {"pairing": {"max_width_m": 0.05}, "segment": {"threshold": 0.1}})
+    from weldseam.config import config_to_dict
+
+    record = tmp_path / "path.json"
+    record.write_text(json.dumps({"version": "x", "params": config_to_dict(config), "seams": []}))
+    assert effective_config(record, {}) == config
+
+
+@pytest.mark.parametrize(
+    ("text", "fragment"),
+    [
+        ("[normals]\nradius = 0.008\n", "unknown config key normals.radius"),
+        ("[normal]\nradius_m = 0.008\n", "unknown config section 'normal'"),
+        ("[normals]\nradius_m = 'big'\n", "normals.radius_m must be a number"),
+        ("[thinning]\niterations = 2.5\n", "thinning.iterations must be an integer"),
+        ("[descriptor]\nvariant = 'paper'\n", "descriptor.variant must be one of released, thesis"),
+        ("[normals\nradius_m = 0.008\n", "not valid TOML"),
+        ("radius_m = 0.008\n", "expected [section] tables"),
+    ],
+)
+def test_a_bad_config_file_is_named_with_its_problem(tmp_path, text, fragment):
+    file = tmp_path / "bad.toml"
+    file.write_text(text)
+    with pytest.raises(InputError) as error:
+        read_config_file(file)
+    assert str(error.value).startswith(f"{file}: ")
+    assert fragment in str(error.value)
+
+
+def test_a_missing_config_file_is_named(tmp_path):
+    with pytest.raises(InputError, match="config file not found"):
+        read_config_file(tmp_path / "nowhere.toml")
