@@ -21,7 +21,9 @@ $(VENV)/.installed: pyproject.toml
 demo: setup
 	$(BIN)/weldseam plan samples/v_butt.ply --camera-pose samples/v_butt.pose.json -o - --format csv
 
+# The report's browser test renders the page in Debian's chromium.
 test: setup
+	@command -v chromium >/dev/null 2>&1 || { $(SUDO) apt-get update -qq && $(SUDO) apt-get install -y -qq chromium; }
 	$(BIN)/python -m pytest -q
 
 samples: setup
