@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -20,6 +22,7 @@ def pair_midpoints(
     angle_tolerance_deg: float,
     max_width_m: float,
     width_tolerance: float,
+    in_band: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Midpoints (M, 3) and widths (M,) of rim pairs across the band.
 
@@ -31,6 +34,12 @@ def pair_midpoints(
     pairs there are short or long, which made the reference implementation zig-zag. The
     median is local because one band can join strips of different widths (a groove meeting
     the plate's end edges).
+
+    in_band(points (K, 3)) -> (K,) bool says whether the surface nearest each point belongs to
+    the band. A pair must span the band, not a gap: the points 1/4, 1/2 and 3/4 of the way
+    across must all be in the band. Without this, where a groove band and a plate-edge band
+    merged into one cluster, rims facing each other across the flat strip between them paired
+    up and put the "seam" on that strip.
     """
     if len(rim) < 4:
         return np.empty((0, 3)), np.empty(0)
@@ -48,6 +57,11 @@ def pair_midpoints(
     )
     across &= length > 2 * tangent_radius_m
     rows, cols, length = rows[across], cols[across], length[across]
+    if in_band is not None and len(rows):
+        fractions = np.array([0.25, 0.5, 0.75])[:, None, None]
+        samples = rim[rows][None] + fractions * (rim[cols] - rim[rows])[None]
+        spans = in_band(samples.reshape(-1, 3)).reshape(len(fractions), -1).all(axis=0)
+        rows, cols, length = rows[spans], cols[spans], length[spans]
     if len(rows) == 0:
         return np.empty((0, 3)), np.empty(0)
     order = np.lexsort((length, rows))

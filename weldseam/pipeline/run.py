@@ -145,14 +145,20 @@ def plan_paths(
                 below_fraction=SUPPORT_BELOW_FRACTION,
             )
     emit("segment", working[np.concatenate(clusters)] if clusters else np.empty((0, 3)))
-
     working_tree = cKDTree(working)
+
     section_params = dict(
         half_width_m=c.section.half_width_m, slab_m=c.section.slab_m, face_radius_m=c.section.face_radius_m,
         groove_min_depth_m=c.section.groove_min_depth_m, fillet_min_leg_m=c.section.fillet_min_leg_m,
     )
     traced: list[TracedSeam] = []
     for members in clusters:
+        in_cluster = np.zeros(len(working), dtype=bool)
+        in_cluster[members] = True
+
+        def in_band(points: np.ndarray, in_cluster=in_cluster) -> np.ndarray:
+            return in_cluster[working_tree.query(points, workers=-1)[1]]
+
         band, band_normals = working[members], normals[members]
         with stage("boundary"):
             rim = band[boundary_mask(band, band_normals, radius_m=c.boundary.radius_m, shift_ratio=c.boundary.shift_ratio)]
@@ -160,7 +166,7 @@ def plan_paths(
         with stage("pairing"):
             midpoints, _ = pair_midpoints(
                 rim, tangent_radius_m=c.boundary.radius_m, angle_tolerance_deg=c.pairing.angle_tolerance_deg,
-                max_width_m=c.pairing.max_width_m, width_tolerance=c.pairing.width_tolerance,
+                max_width_m=c.pairing.max_width_m, width_tolerance=c.pairing.width_tolerance, in_band=in_band,
             )
             if len(midpoints) < 5:  # no rim pairs (a narrow band): thin the band itself
                 midpoints = band
