@@ -17,7 +17,6 @@ from weldseam.types import Scan
 
 SEEDS = (0, 1)
 KNOWN_GAPS = {
-    ("pipe_groove", 0): {"axis"},
     ("pipe_groove", 1): {"coverage"},
     ("ring_groove", 1): {"coverage"},
     ("block_groove", 0): {"coverage"},

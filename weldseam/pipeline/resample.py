@@ -16,7 +16,11 @@ def resample_seam(
     arc length (per-section noise averages out; a 90-degree bend is rounded by about
     sigma). Between knots, positions are interpolated linearly and torch axes by normalised
     linear interpolation (slerp to 1e-4 rad for neighbouring axes within 10 degrees). Frame
-    y is the travel direction of the resampled line, z the torch axis, x = y cross z.
+    y is the travel direction of the resampled line, z the torch axis made perpendicular to
+    it, x = y cross z. The path carries the work angle only: the sections measure the axis
+    well across the seam, but its tilt along the seam comes from averaged normals that lean
+    at grazing views (up to 10 degrees on a pipe's limb); a travel angle is the robot
+    shaping's job.
     """
     arc = arc_lengths(positions, closed)
     total = arc[-1]
@@ -25,14 +29,23 @@ def resample_seam(
         torch_axes = np.vstack([torch_axes, torch_axes[:1]])
     positions, torch_axes = _smooth(positions, torch_axes, arc, smoothing_m, total if closed else None)
     count = max(int(round(total / spacing_m)), 1)
-    samples = np.linspace(0.0, total, count, endpoint=closed) if closed else np.linspace(0.0, total, count + 1)
+    samples = np.linspace(0.0, total, count, endpoint=False) if closed else np.linspace(0.0, total, count + 1)
     new_positions = np.column_stack([np.interp(samples, arc, positions[:, k]) for k in range(3)])
     new_axes = unit(np.column_stack([np.interp(samples, arc, torch_axes[:, k]) for k in range(3)]))
-    if closed:
-        travel = np.roll(new_positions, -1, axis=0) - np.roll(new_positions, 1, axis=0)
-    else:
-        travel = np.gradient(new_positions, axis=0)
+    travel = _chords(new_positions, max(1, int(round(2 * smoothing_m / spacing_m))), closed)
+    new_axes = unit(new_axes - np.sum(new_axes * travel, axis=1, keepdims=True) * travel)
     return new_positions, frames_from_axes(new_axes, travel)
+
+
+def _chords(positions: np.ndarray, k: int, closed: bool) -> np.ndarray:
+    """Unit travel directions (K, 3): the chord from k samples behind to k ahead (fewer at
+    open ends), steadier than neighbouring differences against sub-millimetre noise."""
+    index = np.arange(len(positions))
+    if closed:
+        ahead, behind = (index + k) % len(positions), (index - k) % len(positions)
+    else:
+        ahead, behind = np.minimum(index + k, len(positions) - 1), np.maximum(index - k, 0)
+    return unit(positions[ahead] - positions[behind])
 
 
 def _smooth(positions, axes, arc, sigma_m, period):
