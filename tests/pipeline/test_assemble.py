@@ -45,7 +45,8 @@ def test_a_groove_over_a_block_edge_joins_through_the_bend():
     top = piece(line([0, 0.08, 0.1], [0, 0.003, 0.1]))
     side = piece(line([0, 0.0, 0.094], [0, 0.0, 0.02]))  # down the side, starting 6 mm below the edge
     (seam,) = join([top, side])
-    assert len(seam.positions_m) == len(top.positions_m) + len(side.positions_m)
+    assert len(seam.positions_m) == len(top.positions_m) + len(side.positions_m) + 1  # and the edge's corner
+    assert np.min(np.linalg.norm(seam.positions_m - [0, 0, 0.1], axis=1)) < 1e-9
 
 
 def test_parallel_seams_do_not_join():
@@ -66,3 +67,23 @@ def test_a_seam_is_split_where_another_ends_on_it():
     assert len(seams) == 3
     ends = sorted(round(s.positions_m[:, 0].max(), 3) for s in seams if np.ptp(s.positions_m[:, 0]) > 0.01)
     assert ends == [0.05, 0.1]
+
+
+def test_a_bend_bridged_across_its_failed_sections_keeps_its_corner():
+    # Over a block edge at the origin: the top run ends 5 mm before the edge, the side run
+    # starts 5 mm below it. A straight bridge would cut the corner by 3.5 mm.
+    top = piece(line([-0.06, 0, 0], [-0.005, 0, 0]))
+    side = TracedSeam(line([0, 0, -0.005], [0, 0, -0.06]), np.tile([-1.0, 0, 0], (28, 1)), False, "v_groove", 1.0)
+    (seam,) = join([top, side])
+    distances = np.linalg.norm(seam.positions_m, axis=1)
+    corner = np.argmin(distances)
+    assert distances[corner] < 1e-9
+    assert np.allclose(seam.torch_axes[corner], np.array([-1.0, 0, -1.0]) / np.sqrt(2))  # bisects the faces
+
+
+def test_pieces_meeting_at_a_gentle_turn_get_no_corner_point():
+    angles = np.linspace(0, 2 * np.pi, 180, endpoint=False)
+    ring = 0.05 * np.column_stack([np.cos(angles), np.sin(angles), np.zeros(180)])
+    (seam,) = join([piece(ring[5:60]), piece(ring[66:120])])
+    assert len(seam.positions_m) == 55 + 54
+    assert np.allclose(np.linalg.norm(seam.positions_m, axis=1), 0.05)
