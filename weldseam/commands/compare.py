@@ -30,6 +30,9 @@ def compare(
     tol_mm: Annotated[float, typer.Option("--tol-mm", help="Largest allowed position deviation, mm.")] = 0.5,
     tol_deg: Annotated[float, typer.Option("--tol-deg", help="Largest allowed torch-axis deviation, degrees.")] = 2.0,
     as_json: Annotated[bool, typer.Option("--json", help="Print the report as JSON on stdout.")] = False,
+    quiet: Annotated[
+        bool, typer.Option("--quiet", "-q", help="No summary line on stderr; the exit code says it.")
+    ] = False,
 ) -> None:
     """Compare two path files seam by seam; exit 0 only if they agree within tolerance."""
     with reported():
@@ -44,12 +47,22 @@ def compare(
         if as_json:
             print(json.dumps(comparison.to_dict(tolerance_m, tol_deg), indent=2))
         else:
-            _print_table(comparison, tolerance_m, tol_deg, first, second)
+            _print_table(comparison, tolerance_m, tol_deg)
+        if not quiet:
+            stderr(_summary(comparison, tolerance_m, tol_deg, first, second))
         if not comparison.within(tolerance_m, tol_deg):
             raise typer.Exit(1)
 
 
-def _print_table(comparison, tolerance_m: float, tolerance_deg: float, first: str, second: str) -> None:
+def _summary(comparison, tolerance_m: float, tolerance_deg: float, first: str, second: str) -> str:
+    verdict = "within" if comparison.within(tolerance_m, tolerance_deg) else "NOT within"
+    return (
+        f"{first}: {comparison.count_a} seam(s), {second}: {comparison.count_b} seam(s); "
+        f"{verdict} {tolerance_m * 1000:g} mm / {tolerance_deg:g} deg"
+    )
+
+
+def _print_table(comparison, tolerance_m: float, tolerance_deg: float) -> None:
     """Rich table on a terminal, plain aligned text otherwise (both on stdout)."""
     header = ("seam A", "seam B", "max mm", "mean mm", "axis deg", "length diff mm", "result")
     rows = [
@@ -70,11 +83,6 @@ def _print_table(comparison, tolerance_m: float, tolerance_deg: float, first: st
         )
         for seam in comparison.seams
     ]
-    verdict = "within" if comparison.within(tolerance_m, tolerance_deg) else "NOT within"
-    summary = (
-        f"{first}: {comparison.count_a} seam(s), {second}: {comparison.count_b} seam(s); "
-        f"{verdict} {tolerance_m * 1000:g} mm / {tolerance_deg:g} deg"
-    )
     if sys.stdout.isatty():
         from rich.console import Console
         from rich.table import Table
@@ -89,4 +97,3 @@ def _print_table(comparison, tolerance_m: float, tolerance_deg: float, first: st
             print("  ".join(name.rjust(width) for name, width in zip(header, widths)))
             for row in rows:
                 print("  ".join(cell.rjust(width) for cell, width in zip(row, widths)))
-    stderr(summary)

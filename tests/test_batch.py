@@ -1,0 +1,102 @@
+"""Batch planning as a library: finding scans and sidecars, naming outputs, resuming."""
+
+import json
+
+import numpy as np
+import pytest
+
+from tests.conftest import v_groove_cloud
+from weldseam.batch import find_scans, make_jobs, run_batch, sidecars
+from weldseam.config import PlanConfig, config_to_dict
+from weldseam.errors import InputError
+from weldseam.io.clouds import write_ply
+
+PARAMS = config_to_dict(PlanConfig())
+
+
+def touch(path, text="{}"):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text)
+    return path
+
+
+def jobs_for(scans, out_dir, **changes):
+    options = dict(params=PARAMS, fmt="json", rotation="rotvec", units="m", cloud_frame="base", allow_empty=False)
+    return make_jobs(scans, out_dir, **{**options, **changes})
+
+
+def test_folders_are_searched_recursively_for_scans_only(tmp_path):
+    for name in ("a.ply", "deep/b.pcd", "deep/deeper/c.png", "d.npy"):
+        touch(tmp_path / name)
+    for name in ("c.intrinsics.json", "notes.md", "deep/.hidden.ply"):
+        touch(tmp_path / name)
+    found = find_scans([str(tmp_path)])
+    assert [p.relative_to(tmp_path).as_posix() for p in found] == ["a.ply", "d.npy", "deep/b.pcd", "deep/deeper/c.png"]
+    assert find_scans([str(tmp_path / "*.ply"), str(tmp_path / "a.ply")]) == [tmp_path / "a.ply"]
+
+
+def test_a_missing_input_or_an_empty_glob_is_an_error(tmp_path):
+    with pytest.raises(InputError, match="no such file"):
+        find_scans([str(tmp_path / "nope.ply")])
+    with pytest.raises(InputError, match="matches nothing"):
+        find_scans([str(tmp_path / "*.pcd")])
+
+
+def test_sidecars_follow_the_documented_convention(tmp_path):
+    scan = touch(tmp_path / "part.png")
+    assert sidecars(scan) == (None, None)
+    shared = touch(tmp_path / "d415.intrinsics.json")
+    assert sidecars(scan) == (shared, None)  # the only *.intrinsics.json in the folder
+    generic = touch(tmp_path / "intrinsics.json")
+    pose = touch(tmp_path / "pose.json")
+    assert sidecars(scan) == (generic, pose)
+    own = touch(tmp_path / "part.intrinsics.json")
+    own_pose = touch(tmp_path / "part.pose.json")
+    assert sidecars(scan) == (own, own_pose)
+    assert sidecars(touch(tmp_path / "cloud.ply")) == (None, pose)  # clouds need no intrinsics
+
+
+def test_outputs_that_would_collide_keep_their_extension(tmp_path):
+    scans = [touch(tmp_path / "x" / "part.ply"), touch(tmp_path / "y" / "part.ply"), touch(tmp_path / "part.pcd")]
+    names = [job.output for job in jobs_for(sorted(scans), tmp_path / "out")]
+    out = str(tmp_path / "out")
+    assert sorted(names) == sorted({f"{out}/part.json", f"{out}/x/part.json", f"{out}/y/part.json"})
+
+
+def test_a_changed_scan_sidecar_or_setting_changes_the_fingerprint(tmp_path):
+    scan = touch(tmp_path / "part.ply", "one")
+    first = jobs_for([scan], tmp_path)[0].fingerprint
+    assert jobs_for([scan], tmp_path)[0].fingerprint == first
+    assert jobs_for([scan], tmp_path, fmt="csv")[0].fingerprint != first
+    touch(tmp_path / "part.pose.json", '{"T_base_camera": []}')
+    with_pose = jobs_for([scan], tmp_path)[0].fingerprint
+    assert with_pose != first
+    scan.write_text("two")
+    assert jobs_for([scan], tmp_path)[0].fingerprint != with_pose
+
+
+def test_a_bad_scan_fails_alone_and_a_second_run_skips_what_is_done(tmp_path):
+    good = tmp_path / "in" / "groove.ply"
+    good.parent.mkdir()
+    write_ply(good, v_groove_cloud(np.random.default_rng(1)))
+    touch(
+        good.with_name("groove.pose.json"),
+        json.dumps({"T_base_camera": [[1, 0, 0, 0], [0, 1, 0, 0.05], [0, 0, 1, 0.45], [0, 0, 0, 1]]}),
+    )
+    touch(tmp_path / "in" / "broken.ply", "ply\nformat ascii 1.0\nelement vertex 5\n")
+    out = tmp_path / "out"
+    out.mkdir()
+    jobs = jobs_for(find_scans([str(tmp_path / "in")]), out)
+    first = {r.scan: r for r in run_batch(jobs, out, workers=1, scheduler=None, force=False)}
+    assert first[str(good)].status == "ok" and first[str(good)].seams == 1
+    assert first[str(tmp_path / "in" / "broken.ply")].status == "failed"
+    assert "broken.ply" in first[str(tmp_path / "in" / "broken.ply")].error
+    summary = json.loads((out / "summary.json").read_text())
+    assert [row["status"] for row in summary] == ["failed", "ok"]
+    written = (out / "groove.json").stat().st_mtime_ns
+    second = {r.scan: r for r in run_batch(jobs, out, workers=1, scheduler=None, force=False)}
+    assert second[str(good)].status == "skipped" and second[str(good)].seams == 1
+    assert second[str(tmp_path / "in" / "broken.ply")].status == "failed"  # failures are retried
+    assert (out / "groove.json").stat().st_mtime_ns == written
+    forced = {r.scan: r for r in run_batch(jobs, out, workers=1, scheduler=None, force=True)}
+    assert forced[str(good)].status == "ok"

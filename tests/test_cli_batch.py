@@ -1,0 +1,124 @@
+"""`weldseam batch` run as a user would: a folder with a corrupt scan, resume, dask, Ctrl-C."""
+
+import csv
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+SAMPLES = ROOT / "samples"
+
+
+def weldseam(*args, **options):
+    return subprocess.run(
+        [sys.executable, "-m", "weldseam.cli", *map(str, args)], capture_output=True, timeout=300, **options
+    )
+
+
+@pytest.fixture(scope="module")
+def captures(tmp_path_factory):
+    """The two samples with their sidecars, named by the batch convention, plus a corrupt scan."""
+    folder = tmp_path_factory.mktemp("captures")
+    shutil.copy(SAMPLES / "v_butt.ply", folder / "v_butt.ply")
+    shutil.copy(SAMPLES / "v_butt.pose.json", folder / "v_butt.pose.json")
+    (folder / "cell").mkdir()
+    shutil.copy(SAMPLES / "fillet_t.png", folder / "cell" / "fillet_t.png")
+    shutil.copy(SAMPLES / "fillet_t.pose.json", folder / "cell" / "fillet_t.pose.json")
+    shutil.copy(SAMPLES / "d415.intrinsics.json", folder / "cell" / "intrinsics.json")
+    (folder / "cell" / "broken.ply").write_bytes((SAMPLES / "v_butt.ply").read_bytes()[:2000])
+    return folder
+
+
+@pytest.fixture(scope="module")
+def planned(captures, tmp_path_factory):
+    out = tmp_path_factory.mktemp("out")
+    result = weldseam("batch", captures, "-o", out, "--format", "csv", "--jobs", "2")
+    return result, out
+
+
+def summary_rows(out: Path) -> dict[str, dict]:
+    with open(out / "summary.csv", newline="") as file:
+        return {Path(row["scan"]).name: row for row in csv.DictReader(file)}
+
+
+def test_a_corrupt_scan_fails_alone_and_the_exit_code_says_so(planned):
+    result, out = planned
+    assert result.returncode == 1
+    rows = summary_rows(out)
+    assert {name: row["status"] for name, row in rows.items()} == {
+        "v_butt.ply": "ok", "fillet_t.png": "ok", "broken.ply": "failed"
+    }
+    assert "truncated PLY" in rows["broken.ply"]["error"]
+    assert rows["v_butt.ply"]["seams"] == "1" and float(rows["v_butt.ply"]["length_m"]) > 0.15
+    assert result.stderr.decode().strip().splitlines()[-1].startswith("3 scan(s): 2 planned, 0 up to date, 1 failed")
+    assert result.stdout == b""
+    assert not list(out.rglob("*.tmp")) and not (out / "cell" / "broken.csv").exists()
+
+
+def test_batch_outputs_are_byte_identical_to_plan(planned, captures, tmp_path):
+    _, out = planned
+    single = tmp_path / "single.csv"
+    plan = weldseam(
+        "plan", captures / "cell" / "fillet_t.png", "--intrinsics", captures / "cell" / "intrinsics.json",
+        "--camera-pose", captures / "cell" / "fillet_t.pose.json", "-o", single, "-q",
+    )
+    assert plan.returncode == 0, plan.stderr
+    assert (out / "cell" / "fillet_t.csv").read_bytes() == single.read_bytes()
+
+
+def test_a_second_run_skips_up_to_date_outputs_and_force_redoes_them(planned, captures):
+    _, out = planned
+    again = weldseam("batch", captures, "-o", out, "--format", "csv", "--jobs", "1")
+    assert again.returncode == 1
+    assert "3 scan(s): 0 planned, 2 up to date, 1 failed" in again.stderr.decode()
+    only_good = weldseam("batch", captures / "v_butt.ply", "-o", out, "--format", "csv", "--force")
+    assert only_good.returncode == 0
+    assert "1 scan(s): 1 planned, 0 up to date, 0 failed" in only_good.stderr.decode()
+
+
+def test_the_same_batch_on_a_dask_cluster_gives_the_same_outputs(planned, captures, tmp_path):
+    distributed = pytest.importorskip("distributed")
+    _, out = planned
+    good = tmp_path / "good"
+    shutil.copytree(captures, good)
+    (good / "cell" / "broken.ply").unlink()
+    local = tmp_path / "local"
+    assert weldseam("batch", good, "-o", local, "--format", "csv", "--jobs", "1").returncode == 0
+    with distributed.LocalCluster(
+        n_workers=1, threads_per_worker=1, processes=False, protocol="tcp://", host="127.0.0.1",
+        dashboard_address=None,
+    ) as cluster:
+        remote = tmp_path / "remote"
+        result = weldseam("batch", good, "-o", remote, "--format", "csv", "--scheduler", cluster.scheduler_address)
+    assert result.returncode == 0, result.stderr
+    for name in ("v_butt.csv", "cell/fillet_t.csv"):
+        assert (remote / name).read_bytes() == (local / name).read_bytes()
+
+
+def test_ctrl_c_stops_the_batch_and_leaves_no_half_written_file(captures, tmp_path):
+    many = tmp_path / "many"
+    many.mkdir()
+    for k in range(6):
+        shutil.copy(SAMPLES / "v_butt.ply", many / f"part{k}.ply")
+        shutil.copy(SAMPLES / "v_butt.pose.json", many / f"part{k}.pose.json")
+    out = tmp_path / "out"
+    process = subprocess.Popen(
+        [sys.executable, "-m", "weldseam.cli", "batch", str(many), "-o", str(out), "--jobs", "1"],
+        stderr=subprocess.PIPE, start_new_session=True,
+    )
+    first_line = process.stderr.readline()  # the first scan is done
+    assert first_line.startswith(b"[1/6] ok")
+    time.sleep(0.3)
+    process.send_signal(signal.SIGINT)
+    _, rest = process.communicate(timeout=120)
+    assert process.returncode == 130, rest
+    assert b"Error: interrupted" in rest
+    assert not list(out.glob(".*.tmp"))
+    rows = summary_rows(out)
+    assert 1 <= len(rows) < 6 and all(row["status"] == "ok" for row in rows.values())
+    assert all((out / f"{Path(name).stem}.json").is_file() for name in rows)
