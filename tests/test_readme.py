@@ -3,7 +3,7 @@
 Each ```sh block that runs `.venv/bin/weldseam` is run line by line, in order, in a fresh
 folder that sees `samples/` and `.venv/` (later lines may use what earlier ones wrote).
 Every line must succeed, and every file it names after `-o`, `--png`, `--script` or `>`
-must exist and not be empty. A line ending in `&` starts a server for the lines after it;
+must exist and not be empty (a folder: not empty). A line ending in `&` starts a server for the lines after it;
 it is stopped when the block is done.
 """
 
@@ -48,7 +48,9 @@ def test_readme_block_works(block, tmp_path):
             )
             assert result.returncode == 0, f"{line}\n{result.stderr.decode()}"
             for name in OUTPUT.findall(line):
-                assert (tmp_path / name).is_file() and (tmp_path / name).stat().st_size > 0, f"{line}: no {name}"
+                target = tmp_path / name
+                written = any(target.iterdir()) if target.is_dir() else target.is_file() and target.stat().st_size > 0
+                assert written, f"{line}: nothing written to {name}"
     finally:
         for server in servers:
             server.send_signal(signal.SIGINT)
