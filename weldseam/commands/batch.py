@@ -103,9 +103,10 @@ class _reporter:
 
     def __enter__(self):
         if not self.quiet and sys.stderr.isatty():
+            from rich.console import Console
             from rich.progress import Progress
 
-            self.progress = Progress(transient=False)
+            self.progress = Progress(console=Console(stderr=True))
             self.progress.start()
             self.task = self.progress.add_task("planning", total=self.total)
         return self.report
@@ -120,7 +121,7 @@ class _reporter:
             detail = result.error.removeprefix(f"{result.scan}: ")
         line = f"{result.status:<8} {result.scan}: {detail}"
         if self.progress is not None:
-            self.progress.console.print(line)
+            self.progress.console.print(line, markup=False, highlight=False)
             self.progress.advance(self.task)
         elif not self.quiet:
             stderr(f"[{self.done}/{self.total}] {line}")
