@@ -55,6 +55,14 @@ def test_a_pose_far_away_fails_as_unreachable_and_names_the_seam_and_index():
     assert describe(failure) == f"seam 3 weld 5: unreachable ({distance_m:.2f} m from the shoulder, reach 0.85 m)"
 
 
+def test_a_pose_right_above_the_base_is_unreachable_inside_the_shoulder_offset():
+    report = check_motion(plan_of(seam(np.array([[0.0, 0.02, 0.4]]), seam_id=2)), UR5)
+    assert [describe(row) for row in report.rows] == [
+        f"seam 2 {kind}: unreachable (wrist centre 0.020 m from the base axis, inside the 0.109 m shoulder offset)"
+        for kind in ("approach", "weld 0", "retreat")
+    ]
+
+
 def test_a_path_passing_over_the_shoulder_fails_where_the_wrist_centre_meets_the_base_cylinder():
     # Tool vertical on the line y = d4: the wrist centre's distance in the arm plane from the base axis is |x|.
     positions = line([-0.301, UR5.d_m[3], 0.3], [0.299, UR5.d_m[3], 0.3])

@@ -124,8 +124,19 @@ def flange_poses(plan: MotionPlan, base_pose: np.ndarray | None = None) -> np.nd
 
 
 def _unreachable_reason(model: RobotModel, flange_pose: np.ndarray) -> str:
+    """Why IK found nothing: wrist centre too near the base axis, beyond the reach, or the orientation."""
+    shoulder_offset_m = model.d_m[3]
+    wrist_centre = flange_pose[:3, 3] - model.d_m[5] * flange_pose[:3, 2]
+    axis_distance_m = float(np.hypot(wrist_centre[0], wrist_centre[1]))
+    if axis_distance_m < shoulder_offset_m:
+        return (
+            f"unreachable (wrist centre {axis_distance_m:.3f} m from the base axis, "
+            f"inside the {shoulder_offset_m:.3f} m shoulder offset)"
+        )
     distance_m = float(np.linalg.norm(flange_pose[:3, 3] - model.shoulder_m))
-    return f"unreachable ({distance_m:.2f} m from the shoulder, reach {model.reach_m:.2f} m)"
+    if distance_m > model.reach_m:
+        return f"unreachable ({distance_m:.2f} m from the shoulder, reach {model.reach_m:.2f} m)"
+    return f"unreachable (no joint solution in this orientation, {distance_m:.2f} m from the shoulder)"
 
 
 def check_motion(
