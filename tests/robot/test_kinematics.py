@@ -81,6 +81,15 @@ def test_wrist_singular_pose_gives_solutions_with_a_chosen_q6():
     assert len(singular) >= 1 and np.all(singular[:, 5] == 0.0)
 
 
+def test_a_fully_stretched_arm_on_the_reach_boundary_is_still_solved():
+    model = ROBOTS["ur5"]
+    for joints in ([0.2, -0.7, 0.0, -1.0, 1.2, 0.3], [-2.0, -2.5, 0.0, 0.4, -0.8, 1.0]):
+        pose = forward(model, np.array(joints))
+        solutions = inverse(model, pose)
+        assert any(same_joints(s, np.array(joints), 1e-6) for s in solutions)
+        assert np.abs(forward(model, solutions) - pose).max() < 1e-9
+
+
 def test_margins_are_zero_exactly_at_each_singularity():
     model = ROBOTS["ur5"]
     margins = singularity_margins(model, np.array([[0.1, -1.0, 0.0, 0.2, 0.5, 0.0], [0.1, -1.0, 1.0, 0.2, 0.0, 0.0]]))

@@ -147,12 +147,12 @@ def inverse(model: RobotModel, flange_pose: np.ndarray) -> np.ndarray:
     q6 = np.where(wrist_singular, 0.0, q6)
     q5 = np.where(wrist_singular, np.pi * np.round(q5 / np.pi), q5)
 
-    # Frame 1 -> frame 4 from the known q1, q5, q6; its origin's planar position gives q2, q3.
+    # Frame 1 -> frame 4 from the known q1, q5, q6; p13, frame 3's origin seen from frame 1, is the end of the
+    # planar two-link arm (a2, a3): its length gives q3, its direction q2; the rest of the turn is q4.
     to_frame1 = np.linalg.inv(_link(model, 0, q1))
     from_frame4 = np.linalg.inv(_link(model, 4, q5) @ _link(model, 5, q6))
     frame1_to_4 = to_frame1 @ pose @ from_frame4
-    p13 = frame1_to_4 @ np.array([0.0, -d4, 0.0, 1.0])
-    p13 = p13[:, :3]
+    p13 = (frame1_to_4 @ np.array([0.0, -d4, 0.0, 1.0]))[:, :3]
     p13_norm = np.linalg.norm(p13, axis=1)
     cos_q3, valid3 = _clipped((p13_norm**2 - a2**2 - a3**2) / (2.0 * a2 * a3))
     q3_abs = np.arccos(cos_q3)
