@@ -7,7 +7,7 @@ from typing import Annotated, Optional
 import typer
 
 from weldseam import __version__
-from weldseam.commands import batch, compare, config, plan
+from weldseam.commands import batch, compare, config, plan, report
 from weldseam.commands.common import EXIT_TABLE
 
 app = typer.Typer(
@@ -21,6 +21,7 @@ app = typer.Typer(
 app.command("plan", epilog=plan.EPILOG)(plan.plan)
 app.command("batch", epilog=batch.EPILOG)(batch.batch)
 app.command("compare", epilog=compare.EPILOG)(compare.compare)
+app.command("report", epilog=report.EPILOG)(report.report)
 app.add_typer(config.app, name="config")
 
 

@@ -67,6 +67,10 @@ def plan(
         Optional[Path],
         typer.Option(help="Write each stage's points as PLY into this folder."),
     ] = None,
+    report: Annotated[
+        Optional[str],
+        typer.Option(help="Also write a report of the result: .html (interactive, offline) or .png."),
+    ] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No messages on stderr except errors.")] = False,
     verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Per-stage timings on stderr.")] = False,
 ) -> None:
@@ -106,17 +110,18 @@ def plan(
             camera_origin_m=origin,
             units=units,
         )
-        dump = None
+        if report is not None and not report.lower().endswith((".html", ".png")):
+            raise InputError(f"--report {report}: the report is a .html or a .png file")
+        stages: dict[str, tuple] = {}
+        counter = iter(range(100))
         if dump_stages is not None:
             dump_stages.mkdir(parents=True, exist_ok=True)
-            counter = iter(range(100))
 
-            def dump(stage: str, points, values) -> None:
-                write_ply(
-                    dump_stages / f"{next(counter):02d}_{stage}.ply",
-                    points,
-                    values=values,
-                )
+        def dump(stage: str, points, values) -> None:
+            if report is not None:
+                stages.setdefault(stage, (points, values))
+            if dump_stages is not None:
+                write_ply(dump_stages / f"{next(counter):02d}_{stage}.ply", points, values=values)
 
         with _progress(enabled=not quiet) as on_stage:
             result = plan_paths(loaded, config, dump=dump, on_stage=on_stage, allow_empty=allow_empty)
@@ -126,10 +131,24 @@ def plan(
             fmt=None if config.output.format == "auto" else config.output.format,
             rotation=config.output.rotation,
         )
+        if report is not None:
+            _write_report(report, loaded, result, stages)
         if not quiet:
             for message in [*notes, *result.warnings]:
                 stderr(f"Warning: {message}")
             _report(result, output, time.perf_counter() - started, verbose)
+
+
+def _write_report(target: str, scan, result, stages: dict) -> None:
+    import json
+
+    from weldseam.io.paths import format_path_json
+    from weldseam.report import write_report
+
+    html, png = (target, None) if target.lower().endswith(".html") else (None, target)
+    candidates = stages.get("segment", (None, None))[0]
+    record = json.loads(format_path_json(result))
+    write_report(scan.points_m, list(result.paths), record, html, png, scan_name=scan.source, candidates_m=candidates)
 
 
 @contextmanager
