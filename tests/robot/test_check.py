@@ -83,6 +83,9 @@ def test_a_path_through_the_wrist_singularity_fails_with_the_wrist_problem():
     assert sorted(row.index for row in flagged if row.kind == "weld") == list(range(25, 36))
     flips = [row.index for row in report.rows if "configuration flip (wrist)" in row.problems]
     assert len(flips) == 1 and 29 <= flips[0] <= 31
+    # The arm follows the joint path it was built from, through the singular pose too (q6 kept there).
+    weld_joints = np.array([row.joints for row in report.rows if row.kind == "weld"])
+    assert np.allclose(weld_joints, joints, atol=1e-7)
     assert not report.ok
 
 

@@ -79,6 +79,10 @@ def test_wrist_singular_pose_gives_solutions_with_a_chosen_q6():
     assert np.abs(forward(model, solutions) - pose).max() < 1e-9
     singular = solutions[np.abs(np.sin(solutions[:, 4])) < 1e-9]
     assert len(singular) >= 1 and np.all(singular[:, 5] == 0.0)
+    # Given the q6 to keep, the singular solution is the one we started from.
+    continuous = inverse(model, pose, wrist_singular_q6_rad=0.7)
+    assert any(np.allclose(s, joints, atol=1e-7) for s in continuous)
+    assert np.abs(forward(model, continuous) - pose).max() < 1e-9
 
 
 def test_a_fully_stretched_arm_on_the_reach_boundary_is_still_solved():

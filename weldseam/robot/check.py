@@ -170,7 +170,7 @@ def check_motion(
     low, high = model.joint_limits_rad[:, 0], model.joint_limits_rad[:, 1]
     rows = []
     for (seam_id, kind, index, pose), flange_pose in zip(_plan_poses(plan), flange_poses(plan, base_pose)):
-        solutions = inverse(model, flange_pose)
+        solutions = inverse(model, flange_pose, wrist_singular_q6_rad=float(previous[5]))
         if len(solutions) == 0:
             rows.append(
                 PoseCheck(seam_id, kind, index, pose, None, None, {}, (_unreachable_reason(model, flange_pose),))

@@ -16,7 +16,7 @@ TWO_PI = 2.0 * np.pi
 # acos/asin arguments this far beyond +-1 are rounding noise at the workspace boundary, not unreachable poses.
 BOUNDARY_TOLERANCE = 1e-9
 # Below this |sin q5| the wrist is singular: q4 and q6 turn about the same axis, q5 snaps to 0 or pi and q6 is
-# chosen (0). acos near 1 turns rounding (1e-16) into ~1e-8 rad, so anything below 1e-7 is treated as singular.
+# chosen. acos near 1 turns rounding (1e-16) into ~1e-8 rad, so anything below 1e-7 is treated as singular.
 WRIST_SINGULAR_SIN = 1e-7
 
 
@@ -112,12 +112,13 @@ def _clipped(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.clip(values, -1.0, 1.0), valid
 
 
-def inverse(model: RobotModel, flange_pose: np.ndarray) -> np.ndarray:
+def inverse(model: RobotModel, flange_pose: np.ndarray, *, wrist_singular_q6_rad: float = 0.0) -> np.ndarray:
     """All analytic solutions (k, 6), k <= 8, wrapped to (-pi, pi], for a (4, 4) flange pose; (0, 6) if none.
 
     q1 from the wrist centre p5 = p - d6 z (two shoulder branches), q5 from the flange position along the
-    shoulder's normal (two wrist branches), q6 from the flange orientation (0 when sin q5 ~ 0, the wrist
-    singularity), then q3 from the planar two-link arm (two elbow branches), q2 and q4.
+    shoulder's normal (two wrist branches), q6 from the flange orientation, then q3 from the planar two-link
+    arm (two elbow branches), q2 and q4. At the wrist singularity (sin q5 ~ 0) only q4 + q6 is determined:
+    q6 is set to `wrist_singular_q6_rad` (pass the previous q6 to keep a trajectory continuous).
     """
     pose = np.asarray(flange_pose, dtype=np.float64)
     d4, d6 = model.d_m[3], model.d_m[5]
@@ -144,7 +145,7 @@ def inverse(model: RobotModel, flange_pose: np.ndarray) -> np.ndarray:
         (-inverse_pose[1, 0] * sin_q1 + inverse_pose[1, 1] * cos_q1) / safe_sin_q5,
         (inverse_pose[0, 0] * sin_q1 - inverse_pose[0, 1] * cos_q1) / safe_sin_q5,
     )
-    q6 = np.where(wrist_singular, 0.0, q6)
+    q6 = np.where(wrist_singular, wrist_singular_q6_rad, q6)
     q5 = np.where(wrist_singular, np.pi * np.round(q5 / np.pi), q5)
 
     # Frame 1 -> frame 4 from the known q1, q5, q6; p13, frame 3's origin seen from frame 1, is the end of the
