@@ -9,7 +9,7 @@ from typing import Annotated, Optional
 
 import typer
 
-from weldseam.commands.common import parse_settings, reported, stderr
+from weldseam.commands.common import command_overrides, reported, stderr
 
 EPILOG = (
     "Example:\n\n"
@@ -57,11 +57,7 @@ def batch(
         from weldseam.config import config_to_dict, effective_config
         from weldseam.errors import InputError
 
-        overrides = parse_settings(settings or [])
-        if fmt is not None:
-            overrides.setdefault("output", {})["format"] = fmt
-        if rotation is not None:
-            overrides.setdefault("output", {})["rotation"] = rotation
+        overrides = command_overrides(settings, fmt, rotation)
         config = effective_config(config_file, overrides)
         workers = jobs if jobs is not None else (os.cpu_count() or 1)
         if workers < 1:

@@ -69,3 +69,13 @@ def parse_settings(settings: list[str]) -> dict[str, dict]:
             value = text.strip()
         overrides.setdefault(section, {})[key] = value
     return overrides
+
+
+def command_overrides(settings: list[str] | None, fmt: str | None, rotation: str | None) -> dict[str, dict]:
+    """`--set` values plus the `--format` and `--rotation` options, as config overrides."""
+    overrides = parse_settings(settings or [])
+    if fmt is not None:
+        overrides.setdefault("output", {})["format"] = fmt
+    if rotation is not None:
+        overrides.setdefault("output", {})["rotation"] = rotation
+    return overrides

@@ -10,7 +10,7 @@ from typing import Annotated, Optional
 
 import typer
 
-from weldseam.commands.common import EXIT_TABLE, parse_settings, reported, stderr
+from weldseam.commands.common import EXIT_TABLE, command_overrides, reported, stderr
 from weldseam.errors import InputError
 
 EPILOG = (
@@ -83,11 +83,7 @@ def plan(
         from weldseam.io.scan import load_scan
         from weldseam.pipeline.run import plan_paths
 
-        overrides = parse_settings(settings or [])
-        if fmt is not None:
-            overrides.setdefault("output", {})["format"] = fmt
-        if rotation is not None:
-            overrides.setdefault("output", {})["rotation"] = rotation
+        overrides = command_overrides(settings, fmt, rotation)
         if threshold is not None:
             overrides.setdefault("segment", {})["threshold"] = threshold
         if spacing_mm is not None:
