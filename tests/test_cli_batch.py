@@ -51,7 +51,9 @@ def test_a_corrupt_scan_fails_alone_and_the_exit_code_says_so(planned):
     assert result.returncode == 1
     rows = summary_rows(out)
     assert {name: row["status"] for name, row in rows.items()} == {
-        "v_butt.ply": "ok", "fillet_t.png": "ok", "broken.ply": "failed"
+        "v_butt.ply": "ok",
+        "fillet_t.png": "ok",
+        "broken.ply": "failed",
     }
     assert "truncated PLY" in rows["broken.ply"]["error"]
     assert rows["v_butt.ply"]["seams"] == "1" and float(rows["v_butt.ply"]["length_m"]) > 0.15
@@ -64,8 +66,15 @@ def test_batch_outputs_are_byte_identical_to_plan(planned, captures, tmp_path):
     _, out = planned
     single = tmp_path / "single.csv"
     plan = weldseam(
-        "plan", captures / "cell" / "fillet_t.png", "--intrinsics", captures / "cell" / "intrinsics.json",
-        "--camera-pose", captures / "cell" / "fillet_t.pose.json", "-o", single, "-q",
+        "plan",
+        captures / "cell" / "fillet_t.png",
+        "--intrinsics",
+        captures / "cell" / "intrinsics.json",
+        "--camera-pose",
+        captures / "cell" / "fillet_t.pose.json",
+        "-o",
+        single,
+        "-q",
     )
     assert plan.returncode == 0, plan.stderr
     assert (out / "cell" / "fillet_t.csv").read_bytes() == single.read_bytes()
@@ -81,16 +90,19 @@ def test_a_second_run_skips_up_to_date_outputs_and_force_redoes_them(planned, ca
     assert "1 scan(s): 1 planned, 0 up to date, 0 failed" in only_good.stderr.decode()
 
 
-def test_the_same_batch_on_a_dask_cluster_gives_the_same_outputs(planned, captures, tmp_path):
+def test_the_same_batch_on_a_dask_cluster_gives_the_same_outputs(captures, tmp_path):
     distributed = pytest.importorskip("distributed")
-    _, out = planned
     good = tmp_path / "good"
     shutil.copytree(captures, good)
     (good / "cell" / "broken.ply").unlink()
     local = tmp_path / "local"
     assert weldseam("batch", good, "-o", local, "--format", "csv", "--jobs", "1").returncode == 0
     with distributed.LocalCluster(
-        n_workers=1, threads_per_worker=1, processes=False, protocol="tcp://", host="127.0.0.1",
+        n_workers=1,
+        threads_per_worker=1,
+        processes=False,
+        protocol="tcp://",
+        host="127.0.0.1",
         dashboard_address=None,
     ) as cluster:
         remote = tmp_path / "remote"
@@ -109,7 +121,8 @@ def test_ctrl_c_stops_the_batch_and_leaves_no_half_written_file(captures, tmp_pa
     out = tmp_path / "out"
     process = subprocess.Popen(
         [sys.executable, "-m", "weldseam.cli", "batch", str(many), "-o", str(out), "--jobs", "1"],
-        stderr=subprocess.PIPE, start_new_session=True,
+        stderr=subprocess.PIPE,
+        start_new_session=True,
     )
     first_line = process.stderr.readline()  # the first scan is done
     assert first_line.startswith(b"[1/6] ok")

@@ -26,11 +26,24 @@ def shifted_copy(source: Path, target: Path, dy_m: float) -> Path:
     return target
 
 
-def test_the_plan_of_a_committed_sample_matches_its_golden_file(tmp_path):
-    out = tmp_path / "v_butt.json"
-    planned = weldseam("plan", "samples/v_butt.ply", "--camera-pose", "samples/v_butt.pose.json", "-o", out, "-q")
+SAMPLE_PLANS = {
+    "v_butt": ["samples/v_butt.ply", "--camera-pose", "samples/v_butt.pose.json"],
+    "fillet_t": [
+        "samples/fillet_t.png",
+        "--intrinsics",
+        "samples/d415.intrinsics.json",
+        "--camera-pose",
+        "samples/fillet_t.pose.json",
+    ],
+}
+
+
+@pytest.mark.parametrize("name", sorted(SAMPLE_PLANS))
+def test_the_plan_of_a_committed_sample_matches_its_golden_file(tmp_path, name):
+    out = tmp_path / f"{name}.json"
+    planned = weldseam("plan", *SAMPLE_PLANS[name], "-o", out, "-q")
     assert planned.returncode == 0, planned.stderr
-    result = weldseam("compare", out, GOLDEN / "v_butt.json", "--tol-mm", "0.001", "--tol-deg", "0.001")
+    result = weldseam("compare", out, GOLDEN / f"{name}.json", "--tol-mm", "0.001", "--tol-deg", "0.001")
     assert result.returncode == 0, result.stdout + result.stderr
     assert "within 0.001 mm" in result.stderr.decode()
 

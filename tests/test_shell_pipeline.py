@@ -9,9 +9,7 @@ WELDSEAM = f"{sys.executable} -m weldseam.cli"
 
 
 def shell(command: str):
-    return subprocess.run(
-        ["bash", "-c", f"set -o pipefail; {command}"], cwd=ROOT, capture_output=True, timeout=180
-    )
+    return subprocess.run(["bash", "-c", f"set -o pipefail; {command}"], cwd=ROOT, capture_output=True, timeout=180)
 
 
 def test_a_ply_on_stdin_to_csv_on_stdout_through_other_processes():
