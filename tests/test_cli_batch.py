@@ -1,6 +1,7 @@
 """`weldseam batch` run as a user would: a folder with a corrupt scan, resume, dask, Ctrl-C."""
 
 import csv
+import json
 import shutil
 import signal
 import subprocess
@@ -78,6 +79,16 @@ def test_batch_outputs_are_byte_identical_to_plan(planned, captures, tmp_path):
     )
     assert plan.returncode == 0, plan.stderr
     assert (out / "cell" / "fillet_t.csv").read_bytes() == single.read_bytes()
+
+
+def test_batch_json_equals_plan_json_but_for_the_wall_clock_timings(captures, tmp_path):
+    scan, pose = captures / "v_butt.ply", captures / "v_butt.pose.json"
+    assert weldseam("batch", scan, "-o", tmp_path / "out", "-q").returncode == 0
+    assert weldseam("plan", scan, "--camera-pose", pose, "-o", tmp_path / "single.json", "-q").returncode == 0
+    batched = json.loads((tmp_path / "out" / "v_butt.json").read_text())
+    single = json.loads((tmp_path / "single.json").read_text())
+    assert batched.pop("timings_s").keys() == single.pop("timings_s").keys()
+    assert batched == single and batched["input"]["path"] == str(scan)
 
 
 def test_a_second_run_skips_up_to_date_outputs_and_force_redoes_them(planned, captures):
