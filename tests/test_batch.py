@@ -1,6 +1,7 @@
 """Batch planning as a library: finding scans and sidecars, naming outputs, resuming."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -100,3 +101,31 @@ def test_a_bad_scan_fails_alone_and_a_second_run_skips_what_is_done(tmp_path):
     assert (out / "groove.json").stat().st_mtime_ns == written
     forced = {r.scan: r for r in run_batch(jobs, out, workers=1, scheduler=None, force=True)}
     assert forced[str(good)].status == "ok"
+
+
+def crash_on_second(job):
+    """A stand-in for a scan that kills its worker (a segfault, the out-of-memory killer)."""
+    import os
+
+    from weldseam.batch import JobResult
+
+    if job.scan.endswith("1.ply"):
+        os._exit(9)
+    return JobResult(job.scan, job.output, "ok", seams=1)
+
+
+def test_a_worker_that_dies_fails_its_scan_only(tmp_path):
+    from weldseam.batch import run_local
+
+    scans = [touch(tmp_path / f"part{k}.ply") for k in range(4)]
+    results = {Path(r.scan).name: r for r in run_local(jobs_for(scans, tmp_path / "out"), 2, work=crash_on_second)}
+    assert {name: r.status for name, r in results.items()} == {
+        "part0.ply": "ok", "part1.ply": "failed", "part2.ply": "ok", "part3.ply": "ok"
+    }
+    assert "crashed" in results["part1.ply"].error
+
+
+def test_a_glob_takes_scans_and_leaves_their_sidecars(tmp_path):
+    touch(tmp_path / "part.ply")
+    touch(tmp_path / "part.pose.json")
+    assert find_scans([str(tmp_path / "*")]) == [tmp_path / "part.ply"]

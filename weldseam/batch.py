@@ -20,7 +20,7 @@ import json
 import os
 import time
 from collections.abc import Callable, Iterator
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 from weldseam.errors import InputError, NoSeamError, WeldseamError
@@ -36,6 +36,7 @@ class BatchJob:
     """Everything one worker needs to plan one scan (plain data, so it pickles)."""
 
     scan: str
+    scan_file: str
     output: str
     intrinsics: str | None
     camera_pose: str | None
@@ -80,7 +81,7 @@ def find_scans(inputs: list[str]) -> list[Path]:
         for path in matches:
             if path.is_dir():
                 found.update(p for p in path.rglob("*") if p.is_file() and _is_scan(p))
-            elif path.is_file():
+            elif path.is_file() and (not glob.has_magic(item) or _is_scan(path)):
                 found.add(path)
     return sorted(found)
 
@@ -104,7 +105,14 @@ def sidecars(scan: Path) -> tuple[Path | None, Path | None]:
 
 
 def make_jobs(
-    scans: list[Path], out_dir: Path, *, params: dict, fmt: str, rotation: str, units: str, cloud_frame: str,
+    scans: list[Path],
+    out_dir: Path,
+    *,
+    params: dict,
+    fmt: str,
+    rotation: str,
+    units: str,
+    cloud_frame: str,
     allow_empty: bool,
 ) -> list[BatchJob]:
     """One job per scan, with its output name and a fingerprint of everything that makes its output."""
@@ -124,9 +132,18 @@ def make_jobs(
             digest.update(b"\0" if part is None else _file_digest(part))
         jobs.append(
             BatchJob(
-                scan=str(scan), output=str(name), intrinsics=None if intrinsics is None else str(intrinsics),
-                camera_pose=None if pose is None else str(pose), fingerprint=digest.hexdigest(), params=params,
-                fmt=fmt, rotation=rotation, units=units, cloud_frame=cloud_frame, allow_empty=allow_empty,
+                scan=str(scan),
+                scan_file=str(scan.resolve()),
+                output=str(name.resolve()),
+                intrinsics=None if intrinsics is None else str(intrinsics.resolve()),
+                camera_pose=None if pose is None else str(pose.resolve()),
+                fingerprint=digest.hexdigest(),
+                params=params,
+                fmt=fmt,
+                rotation=rotation,
+                units=units,
+                cloud_frame=cloud_frame,
+                allow_empty=allow_empty,
             )
         )
     return jobs
@@ -149,14 +166,22 @@ def run_job(job: BatchJob) -> JobResult:
         from weldseam.pipeline.run import plan_paths
 
         scan, _ = load_scan(
-            job.scan, intrinsics_path=job.intrinsics, camera_pose_path=job.camera_pose, cloud_frame=job.cloud_frame,
+            job.scan_file,
+            intrinsics_path=job.intrinsics,
+            camera_pose_path=job.camera_pose,
+            cloud_frame=job.cloud_frame,
             units=job.units,
         )
+        scan = replace(scan, source=job.scan)  # recorded and reported as the user named it
         result = plan_paths(scan, with_overrides(PlanConfig(), job.params), allow_empty=job.allow_empty)
         Path(job.output).parent.mkdir(parents=True, exist_ok=True)
         write_paths(result, job.output, fmt=job.fmt, rotation=job.rotation)
         return JobResult(
-            job.scan, job.output, "ok", len(result.paths), round(sum(p.length_m for p in result.paths), 6),
+            job.scan,
+            job.output,
+            "ok",
+            len(result.paths),
+            round(sum(p.length_m for p in result.paths), 6),
             round(time.perf_counter() - started, 3),
         )
     except NoSeamError as error:
@@ -195,25 +220,52 @@ def save_state(jobs: list[BatchJob], results: list[JobResult], out_dir: Path) ->
         if job.output in good:
             result = good[job.output]
             state[os.path.relpath(job.output, out_dir)] = {
-                "fingerprint": job.fingerprint, "seams": result.seams, "length_m": result.length_m,
+                "fingerprint": job.fingerprint,
+                "seams": result.seams,
+                "length_m": result.length_m,
             }
     atomic_write(path, (json.dumps(state, indent=1, sort_keys=True) + "\n").encode())
 
 
-def run_local(jobs: list[BatchJob], workers: int) -> Iterator[JobResult]:
-    """Results in completion order, from `workers` processes (in this process when 1)."""
+def run_local(
+    jobs: list[BatchJob], workers: int, work: Callable[[BatchJob], JobResult] = run_job
+) -> Iterator[JobResult]:
+    """Results in completion order, from `workers` processes (in this process when 1).
+
+    A worker that dies (a crash, the out-of-memory killer) breaks its pool: the unfinished
+    scans then run again one process at a time, so the scan that kills its worker is found,
+    reported as failed, and the others still run. Ctrl-C stops the workers at once.
+    """
     if workers <= 1 or len(jobs) <= 1:
-        yield from map(run_job, jobs)
+        yield from map(work, jobs)
         return
     from concurrent.futures import ProcessPoolExecutor, as_completed
+    from concurrent.futures.process import BrokenProcessPool
 
-    executor = ProcessPoolExecutor(max_workers=min(workers, len(jobs)))
-    try:
-        futures = [executor.submit(run_job, job) for job in jobs]
-        for future in as_completed(futures):
-            yield future.result()
-    finally:
-        executor.shutdown(wait=True, cancel_futures=True)
+    remaining, size = list(jobs), min(workers, len(jobs))
+    while remaining:
+        executor = ProcessPoolExecutor(max_workers=size)
+        futures = {executor.submit(work, job): job for job in remaining}
+        broken = False
+        try:
+            for future in as_completed(futures):
+                try:
+                    result = future.result()
+                except BrokenProcessPool:
+                    broken = True
+                    continue
+                remaining.remove(futures[future])
+                yield result
+        except BaseException:
+            for process in list(getattr(executor, "_processes", {}).values()):
+                process.terminate()
+            executor.shutdown(wait=False, cancel_futures=True)
+            raise
+        executor.shutdown(wait=True)
+        if broken and size == 1:  # one at a time: the first unfinished scan killed its worker
+            culprit = remaining.pop(0)
+            yield JobResult(culprit.scan, culprit.output, "failed", error="the worker process crashed on this scan")
+        size = 1 if broken else size
 
 
 def run_dask(jobs: list[BatchJob], scheduler: str) -> Iterator[JobResult]:
@@ -250,7 +302,12 @@ def _csv_cell(value) -> str:
 
 
 def run_batch(
-    jobs: list[BatchJob], out_dir: Path, *, workers: int, scheduler: str | None, force: bool,
+    jobs: list[BatchJob],
+    out_dir: Path,
+    *,
+    workers: int,
+    scheduler: str | None,
+    force: bool,
     on_result: Callable[[JobResult], None] = lambda result: None,
 ) -> list[JobResult]:
     """Run the jobs not already up to date, report each result as it completes, and write the
