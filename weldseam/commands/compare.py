@@ -42,8 +42,9 @@ def compare(
 
         if tol_mm < 0 or tol_deg < 0:
             raise InputError("--tol-mm and --tol-deg must not be negative")
-        comparison = compare_paths(read_paths(first), read_paths(second))
         tolerance_m = tol_mm / 1000
+        # Seams farther apart than twice the tolerance (at least 10 mm) are different seams.
+        comparison = compare_paths(read_paths(first), read_paths(second), match_limit_m=max(0.01, 2 * tolerance_m))
         if as_json:
             print(json.dumps(comparison.to_dict(tolerance_m, tol_deg), indent=2))
         else:
