@@ -1,0 +1,95 @@
+from __future__ import annotations
+
+import os
+import signal
+
+import numpy as np
+import pytest
+
+from weldseam.errors import RobotFault
+from weldseam.robot.moves import Shaping, motion_plan
+from weldseam.robot.send import execute, path_entries, sigterm_as_interrupt
+from weldseam.types import WeldPath
+
+DOWN = np.column_stack([np.cross([1.0, 0, 0], [0, 0, -1.0]), [1.0, 0, 0], [0, 0, -1.0]])
+
+
+def arc(seam_id: int) -> WeldPath:
+    angles = np.linspace(0.0, np.pi / 2, 300)
+    positions = 0.05 * np.column_stack([np.cos(angles), np.sin(angles), np.zeros(300)])
+    return WeldPath(seam_id=seam_id, positions_m=positions, rotations=np.tile(DOWN, (300, 1, 1)))
+
+
+class FakeClient:
+    """Records calls; can fail (RobotFault or KeyboardInterrupt) at waypoint `fail_at` of the first path."""
+
+    def __init__(self, fail_at: int | None = None, failure: type[BaseException] = RobotFault):
+        self.calls: list[tuple] = []
+        self.fail_at, self.failure = fail_at, failure
+
+    def set_tcp(self, pose):
+        self.calls.append(("tcp", tuple(pose)))
+
+    def set_payload(self, kg):
+        self.calls.append(("payload", kg))
+
+    def move_linear(self, pose, speed_m_s, acceleration_m_s2):
+        self.calls.append(("movel", tuple(pose), speed_m_s))
+
+    def move_path(self, entries, on_progress):
+        self.calls.append(("path", np.array(entries)))
+        for index in range(len(entries)):
+            if index == self.fail_at:
+                raise self.failure("protective stop")
+            on_progress(index)
+
+    def set_digital_output(self, index, on):
+        self.calls.append(("do", index, on))
+
+    def stop(self):
+        self.calls.append(("stop",))
+
+    def actual_tcp_pose(self):
+        return np.zeros(6)
+
+
+PLAN = motion_plan([arc(0), arc(1)], Shaping(base_pose=(0.4, 0, 0.1, 0, 0, 0), arc_output=4, standoff_m=0.01))
+
+
+def test_sequence_and_arc_around_each_weld():
+    client = FakeClient()
+    progress = []
+    execute(PLAN, client, on_progress=lambda seam, index: progress.append((seam, index)))
+    kinds = [call[0] for call in client.calls]
+    assert kinds == ["tcp", "payload"] + ["movel", "movel", "do", "path", "do", "movel"] * 2
+    for seam_number, seam in enumerate(PLAN.seams):
+        base = 2 + 6 * seam_number
+        approach, first, on, path, off, retreat = client.calls[base : base + 6]
+        np.testing.assert_array_equal(approach[1], seam.approach_pose)
+        np.testing.assert_array_equal(first[1], seam.weld_poses[0])
+        assert on == ("do", 4, True) and off == ("do", 4, False)
+        np.testing.assert_array_equal(path[1], path_entries(seam, PLAN))
+        np.testing.assert_array_equal(retreat[1], seam.retreat_pose)
+    assert len(progress) == sum(len(seam.weld_poses) for seam in PLAN.seams)
+
+
+def test_fault_stops_switches_arc_off_and_names_waypoint():
+    client = FakeClient(fail_at=3)
+    with pytest.raises(RobotFault, match=r"seam 0, waypoint 2 of \d+: protective stop"):
+        execute(PLAN, client)
+    assert client.calls[-2:] == [("stop",), ("do", 4, False)]
+    assert sum(call[0] == "path" for call in client.calls) == 1
+
+
+def test_interrupt_stops_and_switches_arc_off():
+    client = FakeClient(fail_at=1, failure=KeyboardInterrupt)
+    with pytest.raises(KeyboardInterrupt):
+        execute(PLAN, client)
+    assert client.calls[-2:] == [("stop",), ("do", 4, False)]
+
+
+def test_sigterm_becomes_keyboard_interrupt_only_inside():
+    previous = signal.getsignal(signal.SIGTERM)
+    with pytest.raises(KeyboardInterrupt), sigterm_as_interrupt():
+        os.kill(os.getpid(), signal.SIGTERM)
+    assert signal.getsignal(signal.SIGTERM) is previous
