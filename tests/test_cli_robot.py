@@ -1,0 +1,77 @@
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from weldseam.io.paths import read_paths
+from weldseam.robot.moves import Shaping, motion_plan
+
+BASE = "0.45,0.1,0.05,0,0,0"
+
+
+def run(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-m", "weldseam.cli", *args],
+        check=False,
+        capture_output=True,
+        text=True,
+        stdin=subprocess.DEVNULL,
+    )
+
+
+@pytest.fixture(scope="module")
+def path_file(tmp_path_factory) -> str:
+    output = tmp_path_factory.mktemp("robot") / "path.json"
+    result = run("plan", "samples/v_butt.ply", "--camera-pose", "samples/v_butt.pose.json", "-o", str(output), "-q")
+    assert result.returncode == 0, result.stderr
+    return str(output)
+
+
+def test_check_passes_in_reach_with_json(path_file):
+    result = run("check", path_file, "--robot-base", BASE, "--standoff-mm", "12", "--json")
+    assert result.returncode == 0, result.stderr
+    report = json.loads(result.stdout)
+    assert report["ok"] and report["failures"] == 0 and report["robot"] == "ur5"
+
+
+def test_check_fails_out_of_reach_naming_the_pose(path_file):
+    result = run("check", path_file, "--robot-base", "2,0,0,0,0,0")
+    assert result.returncode == 4
+    assert result.stderr.startswith("Error: seam 0 approach: unreachable")
+    assert "seam 0 weld 0: unreachable" in result.stdout
+
+
+def test_send_refuses_unreachable_before_anything(path_file):
+    result = run("send", path_file, "--host", "127.0.0.9", "--robot-base", "2,0,0,0,0,0", "--yes")
+    assert result.returncode == 4
+    assert result.stderr.strip().splitlines() == [result.stderr.strip()]
+    assert result.stderr.startswith("Error: refusing to move: seam 0 approach: unreachable")
+
+
+def test_send_without_yes_and_without_tty_refuses(path_file):
+    result = run("send", path_file, "--host", "127.0.0.9", "--robot-base", BASE)
+    assert result.returncode == 2
+    assert "pass --yes" in result.stderr
+    assert result.stdout == ""
+
+
+def test_dry_run_writes_the_urscript_of_the_shaped_path(path_file, tmp_path):
+    script = tmp_path / "weld.script"
+    args = ["--robot-base", BASE, "--standoff-mm", "12", "--arc-do", "1", "--tolerance-mm", "0.2"]
+    result = run("send", path_file, "--dry-run", "--script", str(script), *args)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout == ""
+    assert "seam(s)" in result.stderr
+    plan = motion_plan(read_paths(path_file), Shaping(base_pose=(0.45, 0.1, 0.05, 0, 0, 0), standoff_m=0.012))
+    lines = script.read_text().splitlines()
+    movels = [line for line in lines if line.strip().startswith("movel(")]
+    assert len(movels) == sum(len(seam.weld_poses) + 2 for seam in plan.seams)
+    on = lines.index("  set_standard_digital_out(1, True)")
+    off = lines.index("  set_standard_digital_out(1, False)")
+    weld = lines[on + 1 : off]
+    poses = np.array([[float(v) for v in line.split("p[")[1].split("]")[0].split(",")] for line in weld])
+    np.testing.assert_allclose(poses, plan.seams[0].weld_poses[1:], atol=1e-8)
