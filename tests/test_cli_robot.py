@@ -75,3 +75,10 @@ def test_dry_run_writes_the_urscript_of_the_shaped_path(path_file, tmp_path):
     weld = lines[on + 1 : off]
     poses = np.array([[float(v) for v in line.split("p[")[1].split("]")[0].split(",")] for line in weld])
     np.testing.assert_allclose(poses, plan.seams[0].weld_poses[1:], atol=1e-8)
+
+
+def test_send_to_a_bad_host_fails_with_one_line(path_file):
+    result = run("send", path_file, "--host", "127.0.0.254", "--robot-base", BASE, "--yes")
+    assert result.returncode == 5
+    assert result.stderr.splitlines()[-1].startswith("Error: cannot connect to 127.0.0.254:30004")
+    assert "Traceback" not in result.stderr

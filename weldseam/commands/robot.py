@@ -232,8 +232,10 @@ def _run(plan, host: str, log: str | None) -> None:
     from rich.progress import Progress
 
     from weldseam.io.atomic import atomic_write
-    from weldseam.robot.client import UrClient
     from weldseam.robot.send import execute, sigterm_as_interrupt
+
+    _probe(host)
+    from weldseam.robot.client import UrClient
 
     rows: list[dict] = []
 
@@ -256,6 +258,18 @@ def _run(plan, host: str, log: str | None) -> None:
             client.close()
             if log:
                 atomic_write(log, _log_text(rows, log).encode())
+
+
+def _probe(host: str, port: int = 30004, timeout_s: float = 3.0) -> None:
+    """Fail fast (RobotFault, exit 5) when nothing answers on the controller's RTDE port."""
+    import socket
+
+    from weldseam.errors import RobotFault
+
+    try:
+        socket.create_connection((host, port), timeout=timeout_s).close()
+    except OSError as error:
+        raise RobotFault(f"cannot connect to {host}:{port} ({error}); nothing moved") from None
 
 
 def _log_text(rows: list[dict], log: str) -> str:
