@@ -229,6 +229,7 @@ def send(
 
 
 def _run(plan, host: str, log: str | None) -> None:
+    from rich.console import Console
     from rich.progress import Progress
 
     from weldseam.io.atomic import atomic_write
@@ -243,7 +244,7 @@ def _run(plan, host: str, log: str | None) -> None:
         rows.append({"seam_id": plan.seams[seam_index].seam_id, "waypoint": waypoint, "pose": [float(v) for v in pose]})
 
     client = UrClient(host)
-    with Progress(disable=not sys.stderr.isatty(), console=None) as progress:
+    with Progress(disable=not sys.stderr.isatty(), console=Console(stderr=True)) as progress:
         tasks = [progress.add_task(f"seam {s.seam_id}", total=len(s.weld_poses)) for s in plan.seams]
         try:
             with sigterm_as_interrupt():
