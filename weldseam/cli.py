@@ -7,7 +7,7 @@ from typing import Annotated, Optional
 import typer
 
 from weldseam import __version__
-from weldseam.commands import batch, compare, config, plan, report
+from weldseam.commands import batch, compare, config, plan, report, robot
 from weldseam.commands.common import EXIT_TABLE
 
 app = typer.Typer(
@@ -19,6 +19,8 @@ app = typer.Typer(
     epilog=f"Exit codes:\n\n{EXIT_TABLE}",
 )
 app.command("plan", epilog=plan.EPILOG)(plan.plan)
+app.command("check", epilog=robot.CHECK_EPILOG)(robot.check)
+app.command("send", epilog=robot.SEND_EPILOG)(robot.send)
 app.command("batch", epilog=batch.EPILOG)(batch.batch)
 app.command("compare", epilog=compare.EPILOG)(compare.compare)
 app.command("report", epilog=report.EPILOG)(report.report)
