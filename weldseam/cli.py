@@ -7,7 +7,7 @@ from typing import Annotated, Optional
 import typer
 
 from weldseam import __version__
-from weldseam.commands import batch, compare, config, plan, report, robot
+from weldseam.commands import batch, compare, config, plan, report, robot, robot_sim
 from weldseam.commands.common import EXIT_TABLE
 
 app = typer.Typer(
@@ -21,6 +21,7 @@ app = typer.Typer(
 app.command("plan", epilog=plan.EPILOG)(plan.plan)
 app.command("check", epilog=robot.CHECK_EPILOG)(robot.check)
 app.command("send", epilog=robot.SEND_EPILOG)(robot.send)
+app.command("robot-sim", epilog=robot_sim.EPILOG)(robot_sim.robot_sim)
 app.command("batch", epilog=batch.EPILOG)(batch.batch)
 app.command("compare", epilog=compare.EPILOG)(compare.compare)
 app.command("report", epilog=report.EPILOG)(report.report)

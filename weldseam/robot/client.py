@@ -1,0 +1,145 @@
+"""`UrClient`: the robot connection `send` drives, over ur-rtde 1.6.5's control, receive and IO interfaces.
+
+Every move is started asynchronously and then watched (progress, protective stop, program state,
+connection) in a short Python loop, so Ctrl-C and SIGTERM act within one poll even mid-move: ur-rtde's
+blocking calls hold the interpreter until they return. Any fault raises RobotFault; nothing is retried.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+from weldseam.errors import RobotFault
+
+POLL_S = 0.008
+START_TIMEOUT_S = 2.0
+OUTPUT_TIMEOUT_S = 1.0
+STOP_DECELERATION_M_S2 = 2.0
+ARRIVED_M, ARRIVED_RAD = 1e-4, 2e-3
+
+
+class UrClient:
+    """One UR controller at `host`; connect() before use, close() after."""
+
+    def __init__(self, host: str):
+        self.host = host
+        self._control = self._receive = self._io = None
+
+    def connect(self) -> None:
+        try:
+            import rtde_control
+            import rtde_io
+            import rtde_receive
+
+            self._control = rtde_control.RTDEControlInterface(self.host)
+            self._receive = rtde_receive.RTDEReceiveInterface(self.host)
+            self._io = rtde_io.RTDEIOInterface(self.host)
+        except RuntimeError as error:
+            raise RobotFault(f"cannot start ur-rtde's control script on {self.host}: {error}; nothing moved") from None
+
+    def close(self) -> None:
+        for interface in (self._control, self._io, self._receive):
+            if interface is None:
+                continue
+            try:
+                if interface is self._control and interface.isConnected():
+                    interface.stopScript()
+                interface.disconnect()
+            except RuntimeError:
+                pass
+
+    def set_tcp(self, pose: np.ndarray) -> None:
+        self._call("setTcp", self._control.setTcp, [float(v) for v in pose])
+
+    def set_payload(self, mass_kg: float) -> None:
+        self._call("setPayload", self._control.setPayload, float(mass_kg), [])
+
+    def move_linear(self, pose: np.ndarray, speed_m_s: float, acceleration_m_s2: float) -> None:
+        target = [float(v) for v in pose]
+        self._call("moveL", self._control.moveL, target, float(speed_m_s), float(acceleration_m_s2), True)
+        self._watch("moveL", np.array(target))
+
+    def move_path(self, entries: np.ndarray, on_progress: Callable[[int], None] | None = None) -> None:
+        """One moveL path of (K, 9) entries [pose, speed, acceleration, blend]; on_progress(waypoint) as it runs."""
+        rows = [[float(v) for v in row] for row in entries]
+        self._call("moveL path", self._control.moveL, rows, True)
+        self._watch("moveL path", np.asarray(entries)[-1, :6], on_progress, last_index=len(rows) - 1)
+
+    def set_digital_output(self, index: int, on: bool) -> None:
+        """Switch a standard digital output and wait until the controller reports it switched."""
+        self._call(f"digital output {index}", self._io.setStandardDigitalOut, int(index), bool(on))
+        deadline = time.monotonic() + OUTPUT_TIMEOUT_S
+        while self._receive.getDigitalOutState(int(index)) != bool(on):
+            if time.monotonic() > deadline:
+                raise RobotFault(f"digital output {index} did not switch {'on' if on else 'off'} within 1 s")
+            self._check(f"digital output {index}")
+            time.sleep(POLL_S)
+
+    def stop(self) -> None:
+        self._control.stopL(STOP_DECELERATION_M_S2)
+
+    def actual_tcp_pose(self) -> np.ndarray:
+        return np.array(self._receive.getActualTCPPose())
+
+    def _call(self, what: str, function, *args) -> None:
+        try:
+            accepted = function(*args)
+        except RuntimeError as error:
+            self._check(what)
+            raise RobotFault(f"{what}: {error}") from None
+        if accepted is False:
+            self._check(what)
+            raise RobotFault(f"{what} refused by the controller")
+
+    def _check(self, what: str) -> None:
+        """Raise RobotFault if the connection is gone, the arm is protective-stopped or the program stopped."""
+        try:
+            connected = self._control.isConnected() and self._receive.isConnected()
+            protective_stop = connected and self._receive.isProtectiveStopped()
+            running = connected and self._control.isProgramRunning()
+        except RuntimeError:
+            connected = False
+        if not connected:
+            raise RobotFault(f"connection to {self.host} lost during {what}; the arc output could not be confirmed off")
+        if protective_stop:
+            raise RobotFault(f"protective stop during {what}")
+        if not running:
+            raise RobotFault(
+                f"the control script stopped during {what} (program stopped on the pendant, a failed IK or a pose "
+                "outside the safety limits)"
+            )
+
+    def _arrived(self, pose: np.ndarray) -> bool:
+        actual = self.actual_tcp_pose()
+        near = np.linalg.norm(actual[:3] - pose[:3]) < ARRIVED_M
+        return bool(near and np.abs(actual[3:] - pose[3:]).max() < ARRIVED_RAD)
+
+    def _watch(
+        self, what: str, final_pose: np.ndarray, on_progress: Callable[[int], None] | None = None, last_index: int = 0
+    ) -> None:
+        """Follow an asynchronous move until it ends; report each new waypoint index to on_progress."""
+        started, seen_running, reported = time.monotonic(), False, -1
+        while True:
+            try:
+                status = self._control.getAsyncOperationProgressEx()
+                running = status.isAsyncOperationRunning()
+                index = status.progress() if running else -1
+            except RuntimeError:
+                self._check(what)
+                raise
+            self._check(what)
+            if running:
+                seen_running = True
+                if on_progress is not None and index > reported:
+                    reported = index
+                    on_progress(index)
+            elif seen_running or self._arrived(final_pose):
+                break
+            elif time.monotonic() - started > START_TIMEOUT_S:
+                raise RobotFault(f"{what}: the controller did not start the move within {START_TIMEOUT_S:g} s")
+            time.sleep(POLL_S)
+        if on_progress is not None and reported < last_index:
+            on_progress(last_index)
