@@ -75,10 +75,27 @@ def test_sequence_and_arc_around_each_weld():
 
 def test_fault_stops_switches_arc_off_and_names_waypoint():
     client = FakeClient(fail_at=3)
-    with pytest.raises(RobotFault, match=r"seam 0, waypoint 2 of \d+: protective stop"):
+    with pytest.raises(RobotFault, match=r"seam 0, waypoint 2 of \d+: protective stop \(arm stopped, arc off; nothing"):
         execute(PLAN, client)
     assert client.calls[-2:] == [("stop",), ("do", 4, False)]
     assert sum(call[0] == "path" for call in client.calls) == 1
+
+
+class LostClient(FakeClient):
+    """The connection drops at waypoint 3: the fault, then stop and the arc output fail too."""
+
+    def stop(self):
+        raise RobotFault("connection lost")
+
+    def set_digital_output(self, index, on):
+        if any(call[0] == "path" for call in self.calls):
+            raise RobotFault("connection lost")
+        super().set_digital_output(index, on)
+
+
+def test_a_fault_that_leaves_the_arc_unconfirmed_says_so():
+    with pytest.raises(RobotFault, match=r"waypoint 2 .*stopL not confirmed, ARC OUTPUT NOT CONFIRMED OFF"):
+        execute(PLAN, LostClient(fail_at=3))
 
 
 def test_interrupt_stops_and_switches_arc_off():

@@ -128,6 +128,7 @@ def test_blends_never_exceed_half_the_shorter_segment_and_ends_are_zero():
     radii = shaping.blend_radii(positions, 0.005)
     segments = np.linalg.norm(np.diff(positions, axis=0), axis=1)
     assert radii[0] == 0.0 and radii[-1] == 0.0
-    assert np.all(radii[1:-1] <= 0.5 * np.minimum(segments[:-1], segments[1:]) + 1e-15)
+    assert np.all(radii[1:-1] <= 0.5 * np.minimum(segments[:-1], segments[1:]) - shaping.BLEND_MARGIN_M + 1e-15)
     assert np.all(radii <= 0.005)
-    np.testing.assert_allclose(radii[1:-1], [0.001, 0.001, 0.002, 0.002])
+    np.testing.assert_allclose(radii[1:-1], np.array([0.001, 0.001, 0.002, 0.002]) - 1e-5)
+    assert np.all(shaping.blend_radii(positions * 1e-3, 0.005) == 0.0), "segments under 20 um get no blend"

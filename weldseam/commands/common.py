@@ -27,11 +27,12 @@ EXIT_CODES = (
     (70, "internal error (a bug: please report it with the input)"),
     (130, "interrupted (Ctrl-C)"),
 )
+EXIT_ROBOT_FAULT = 5
 EXIT_FOR = (
     (InputError, 2),
     (NoSeamError, 3),
     (UnreachableError, 4),
-    (RobotFault, 5),
+    (RobotFault, EXIT_ROBOT_FAULT),
     (StageError, 70),
 )
 EXIT_TABLE = "\n\n".join(f"{code}: {meaning}" for code, meaning in EXIT_CODES)

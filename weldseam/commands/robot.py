@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import json
+import os
 import sys
 from typing import Annotated
 
 import typer
 
-from weldseam.commands.common import EXIT_TABLE, reported, stderr
-from weldseam.errors import InputError, UnreachableError
+from weldseam.commands.common import EXIT_ROBOT_FAULT, EXIT_TABLE, reported, stderr
+from weldseam.errors import InputError, RobotFault, UnreachableError
 
 CHECK_EPILOG = (
     "Example:\n\n"
@@ -244,21 +245,30 @@ def _run(plan, host: str, log: str | None) -> None:
         rows.append({"seam_id": plan.seams[seam_index].seam_id, "waypoint": waypoint, "pose": [float(v) for v in pose]})
 
     client = UrClient(host)
-    with Progress(disable=not sys.stderr.isatty(), console=Console(stderr=True)) as progress:
-        tasks = [progress.add_task(f"seam {s.seam_id}", total=len(s.weld_poses)) for s in plan.seams]
-        try:
-            with sigterm_as_interrupt():
-                client.connect()
-                execute(
-                    plan,
-                    client,
-                    on_progress=lambda seam_index, waypoint: progress.update(tasks[seam_index], completed=waypoint + 1),
-                    on_pose=record if log else None,
-                )
-        finally:
-            client.close()
-            if log:
-                atomic_write(log, _log_text(rows, log).encode())
+    try:
+        with Progress(disable=not sys.stderr.isatty(), console=Console(stderr=True)) as progress:
+            tasks = [progress.add_task(f"seam {s.seam_id}", total=len(s.weld_poses)) for s in plan.seams]
+            try:
+                with sigterm_as_interrupt():
+                    client.connect()
+                    execute(
+                        plan,
+                        client,
+                        on_progress=lambda seam, waypoint: progress.update(tasks[seam], completed=waypoint + 1),
+                        on_pose=record if log else None,
+                    )
+            finally:
+                client.close()
+                if log:
+                    atomic_write(log, _log_text(rows, log).encode())
+    except RobotFault as fault:
+        if not client.connection_lost:
+            raise
+        # ur-rtde 1.6.5's background threads abort the interpreter at exit after a dropped connection
+        # ("terminate called ... End of file"): report and leave before they can turn exit 5 into 134.
+        stderr(f"Error: {fault}")
+        sys.stdout.flush()
+        os._exit(EXIT_ROBOT_FAULT)
 
 
 def _probe(host: str, port: int = 30004, timeout_s: float = 3.0) -> None:

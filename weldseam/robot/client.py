@@ -9,10 +9,12 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from contextlib import suppress
 
 import numpy as np
 
 from weldseam.errors import RobotFault
+from weldseam.robot.motion import pose_matrices
 
 POLL_S = 0.008
 START_TIMEOUT_S = 2.0
@@ -27,6 +29,12 @@ class UrClient:
     def __init__(self, host: str):
         self.host = host
         self._control = self._receive = self._io = None
+        # Once the connection is lost, ur-rtde's calls try to reconnect and block for minutes: make none.
+        self._lost = False
+
+    @property
+    def connection_lost(self) -> bool:
+        return self._lost
 
     def connect(self) -> None:
         try:
@@ -41,6 +49,8 @@ class UrClient:
             raise RobotFault(f"cannot start ur-rtde's control script on {self.host}: {error}; nothing moved") from None
 
     def close(self) -> None:
+        if self._lost:
+            return
         for interface in (self._control, self._io, self._receive):
             if interface is None:
                 continue
@@ -70,15 +80,17 @@ class UrClient:
 
     def set_digital_output(self, index: int, on: bool) -> None:
         """Switch a standard digital output and wait until the controller reports it switched."""
+        self._check_connection(f"digital output {index}")
         self._call(f"digital output {index}", self._io.setStandardDigitalOut, int(index), bool(on))
         deadline = time.monotonic() + OUTPUT_TIMEOUT_S
         while self._receive.getDigitalOutState(int(index)) != bool(on):
             if time.monotonic() > deadline:
                 raise RobotFault(f"digital output {index} did not switch {'on' if on else 'off'} within 1 s")
-            self._check(f"digital output {index}")
+            self._check_connection(f"digital output {index}")
             time.sleep(POLL_S)
 
     def stop(self) -> None:
+        self._check_connection("stopL")
         self._control.stopL(STOP_DECELERATION_M_S2)
 
     def actual_tcp_pose(self) -> np.ndarray:
@@ -94,16 +106,23 @@ class UrClient:
             self._check(what)
             raise RobotFault(f"{what} refused by the controller")
 
+    def _check_connection(self, what: str) -> None:
+        try:
+            self._lost = self._lost or not (self._control.isConnected() and self._receive.isConnected())
+        except RuntimeError:
+            self._lost = True
+        if self._lost:
+            raise RobotFault(f"connection to {self.host} lost during {what}")
+
     def _check(self, what: str) -> None:
         """Raise RobotFault if the connection is gone, the arm is protective-stopped or the program stopped."""
+        self._check_connection(what)
         try:
-            connected = self._control.isConnected() and self._receive.isConnected()
-            protective_stop = connected and self._receive.isProtectiveStopped()
-            running = connected and self._control.isProgramRunning()
+            protective_stop = self._receive.isProtectiveStopped()
+            running = self._control.isProgramRunning()
         except RuntimeError:
-            connected = False
-        if not connected:
-            raise RobotFault(f"connection to {self.host} lost during {what}; the arc output could not be confirmed off")
+            self._check_connection(what)
+            raise
         if protective_stop:
             raise RobotFault(f"protective stop during {what}")
         if not running:
@@ -112,33 +131,47 @@ class UrClient:
                 "outside the safety limits)"
             )
 
+    def _progress(self, what: str) -> tuple[bool, int]:
+        """(running, waypoint) from the controller's async progress register."""
+        try:
+            status = self._control.getAsyncOperationProgressEx()
+        except RuntimeError:
+            self._check_connection(what)
+            raise
+        running = status.isAsyncOperationRunning()
+        return running, status.progress() if running else -1
+
     def _arrived(self, pose: np.ndarray) -> bool:
-        actual = self.actual_tcp_pose()
-        near = np.linalg.norm(actual[:3] - pose[:3]) < ARRIVED_M
-        return bool(near and np.abs(actual[3:] - pose[3:]).max() < ARRIVED_RAD)
+        actual, target = pose_matrices(self.actual_tcp_pose()), pose_matrices(pose)
+        turn = np.arccos(np.clip((np.trace(actual[:3, :3].T @ target[:3, :3]) - 1.0) / 2.0, -1.0, 1.0))
+        return bool(np.linalg.norm(actual[:3, 3] - target[:3, 3]) < ARRIVED_M and turn < ARRIVED_RAD)
 
     def _watch(
         self, what: str, final_pose: np.ndarray, on_progress: Callable[[int], None] | None = None, last_index: int = 0
     ) -> None:
         """Follow an asynchronous move until it ends; report each new waypoint index to on_progress."""
         started, seen_running, reported = time.monotonic(), False, -1
+
+        def report(index: int) -> None:
+            nonlocal reported
+            if on_progress is not None and index > reported:
+                reported = index
+                on_progress(index)
+
         while True:
-            try:
-                status = self._control.getAsyncOperationProgressEx()
-                running = status.isAsyncOperationRunning()
-                index = status.progress() if running else -1
-            except RuntimeError:
-                self._check(what)
-                raise
-            self._check(what)
+            running, index = self._progress(what)
             if running:
                 seen_running = True
-                if on_progress is not None and index > reported:
-                    reported = index
-                    on_progress(index)
-            elif seen_running or self._arrived(final_pose):
+                report(index)
+            try:
+                self._check(what)
+            except RobotFault:
+                with suppress(RobotFault, RuntimeError):
+                    report(self._progress(what)[1])
+                raise
+            if not running and (seen_running or self._arrived(final_pose)):
                 break
-            elif time.monotonic() - started > START_TIMEOUT_S:
+            if not running and time.monotonic() - started > START_TIMEOUT_S:
                 raise RobotFault(f"{what}: the controller did not start the move within {START_TIMEOUT_S:g} s")
             time.sleep(POLL_S)
         if on_progress is not None and reported < last_index:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import signal
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager, suppress
+from contextlib import contextmanager
 
 import numpy as np
 
@@ -50,12 +50,19 @@ def _arc(client, plan: MotionPlan, on: bool) -> None:
         client.set_digital_output(plan.arc_output, on)
 
 
-def _safe_stop(client, plan: MotionPlan) -> None:
-    """Stop the arm and switch the arc off, each as far as the connection still allows."""
-    with suppress(Exception):
+def _safe_stop(client, plan: MotionPlan) -> str:
+    """Stop the arm and switch the arc off, each as far as the connection still allows; say what is known."""
+    try:
         client.stop()
-    with suppress(Exception):
+        stopped = "arm stopped"
+    except Exception:
+        stopped = "stopL not confirmed"
+    try:
         _arc(client, plan, False)
+        arc = "arc off"
+    except Exception:
+        arc = "ARC OUTPUT NOT CONFIRMED OFF: check the cell"
+    return f"{stopped}, {arc}"
 
 
 def execute(
@@ -97,9 +104,9 @@ def execute(
         _safe_stop(client, plan)
         raise
     except RobotFault as fault:
-        _safe_stop(client, plan)
+        state = _safe_stop(client, plan)
         if seam_index < 0:
-            raise
+            raise RobotFault(f"{fault} ({state}; nothing retried)") from None
         seam = plan.seams[seam_index]
         where = f"waypoint {waypoint} of {len(seam.weld_poses)}" if waypoint >= 0 else "before the weld path"
-        raise RobotFault(f"seam {seam.seam_id}, {where}: {fault} (arm stopped, arc off; nothing retried)") from None
+        raise RobotFault(f"seam {seam.seam_id}, {where}: {fault} ({state}; nothing retried)") from None

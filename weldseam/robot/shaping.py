@@ -14,6 +14,8 @@ from scipy.spatial.transform import Rotation, Slerp
 
 from weldseam.types import WeldPath
 
+BLEND_MARGIN_M = 1e-5
+
 
 def to_robot_base(path: WeldPath, base_pose: np.ndarray) -> WeldPath:
     """Express the path in the robot base frame; base_pose (4, 4) = scan base frame in the robot base frame."""
@@ -106,9 +108,14 @@ def backed_off(pose_matrix: np.ndarray, distance_m: float) -> np.ndarray:
 
 
 def blend_radii(positions_m: np.ndarray, max_blend_m: float) -> np.ndarray:
-    """(K,) blends: min(max_blend_m, half the shorter adjacent segment), the first and last 0."""
+    """(K,) blends: min(max_blend_m, half the shorter adjacent segment - 10 um), at least 0; the first and last 0.
+
+    The 10 um margin keeps two neighbouring blends apart even after ur-rtde writes them into its
+    script with 6 significant digits (positions move by up to 0.5 um, so exact halves could overlap).
+    """
     segments_m = np.linalg.norm(np.diff(positions_m, axis=0), axis=1)
     radii = np.zeros(len(positions_m))
     if len(positions_m) > 2:
-        radii[1:-1] = np.minimum(max_blend_m, 0.5 * np.minimum(segments_m[:-1], segments_m[1:]))
+        half_m = 0.5 * np.minimum(segments_m[:-1], segments_m[1:]) - BLEND_MARGIN_M
+        radii[1:-1] = np.clip(half_m, 0.0, max_blend_m)
     return radii

@@ -1,0 +1,165 @@
+"""End to end: `weldseam plan` a sample, then `weldseam send` it through ur-rtde 1.6.5 to robot-sim."""
+
+from __future__ import annotations
+
+import json
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from weldseam.io.paths import read_paths
+from weldseam.robot.moves import Shaping, motion_plan
+from weldseam.robot.sim_controller import Faults
+
+BASE = "0.45,0.1,0.05,0,0,0"
+SHAPING = ["--robot-base", BASE, "--standoff-mm", "12", "--arc-do", "1", "--speed-mm-s", "10"]
+# ur-rtde 1.6.5 writes moveL path poses into its script with 6 significant digits: positions (< 1 m)
+# arrive within 5e-7 m; rotation-vector components near pi within 5e-6 rad.
+POSITION_TOLERANCE_M = 1e-6
+ROTATION_TOLERANCE_RAD = 1e-5
+
+
+def weldseam(*args: str, **options) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "weldseam.cli", *args], capture_output=True, text=True,
+                          stdin=subprocess.DEVNULL, timeout=120, **options)  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def two_seams(tmp_path_factory) -> str:
+    """The V-groove sample planned, plus the same seam 60 mm over: a two-seam path file."""
+    folder = tmp_path_factory.mktemp("send")
+    planned = folder / "path.json"
+    result = weldseam("plan", "samples/v_butt.ply", "--camera-pose", "samples/v_butt.pose.json", "-o", str(planned))
+    assert result.returncode == 0, result.stderr
+    record = json.loads(planned.read_text())
+    second = json.loads(json.dumps(record["seams"][0]))
+    second["id"] = 1
+    for pose in second["poses"]:
+        pose["y"] += 0.06
+    record["seams"].append(second)
+    path = folder / "two_seams.json"
+    path.write_text(json.dumps(record))
+    return str(path)
+
+
+def expected_plan(path: str):
+    setup = Shaping(base_pose=tuple(float(v) for v in BASE.split(",")), standoff_m=0.012, arc_output=1,
+                    weld_speed_m_s=0.01)  # fmt: skip
+    return motion_plan(read_paths(path), setup)
+
+
+def assert_same_pose(received, planned, what: str) -> None:
+    received, planned = np.asarray(received, dtype=float), np.asarray(planned, dtype=float)
+    assert np.linalg.norm(received[:3] - planned[:3]) <= POSITION_TOLERANCE_M, what
+    turn = Rotation.from_rotvec(planned[3:]).inv() * Rotation.from_rotvec(received[3:])
+    assert turn.magnitude() <= ROTATION_TOLERANCE_RAD, what
+
+
+def events_of(sim, *kinds: str) -> list[dict]:
+    return [event for event in sim.events if event["event"] in kinds]
+
+
+def test_send_delivers_the_planned_motion_with_the_arc_on_exactly_around_each_weld(robot_sim, two_seams, tmp_path):
+    sim = robot_sim(speedup=100.0)
+    log = tmp_path / "tcp.csv"
+    result = weldseam("send", two_seams, "--host", sim.host, *SHAPING, "--yes", "--log", str(log))
+    assert result.returncode == 0, result.stderr
+    plan = expected_plan(two_seams)
+    kinds = [event["event"] for event in sim.events]
+    assert kinds == ["set_tcp", "set_payload"] + [
+        "movel", "movel", "digital_output", "path", "digital_output", "movel"] * 2  # fmt: skip
+    assert sim.events[0]["pose"] == pytest.approx(plan.tcp_pose.tolist(), abs=1e-12)
+    for number, seam in enumerate(plan.seams):
+        approach, first, on, path, off, retreat = sim.events[2 + 6 * number : 8 + 6 * number]
+        assert approach["pose"] == pytest.approx(seam.approach_pose.tolist(), abs=1e-12)
+        assert first["pose"] == pytest.approx(seam.weld_poses[0].tolist(), abs=1e-12)
+        assert retreat["pose"] == pytest.approx(seam.retreat_pose.tolist(), abs=1e-12)
+        entries = np.array(path["entries"])
+        assert len(entries) == len(seam.weld_poses) > 2
+        for index, (received, planned) in enumerate(zip(entries[:, :6], seam.weld_poses, strict=True)):
+            assert_same_pose(received, planned, f"seam {number} waypoint {index}")
+        assert np.allclose(entries[:, 6], 0.01, rtol=1e-5) and np.allclose(entries[:, 7], plan.acceleration_m_s2)
+        blends = entries[:, 8]
+        assert np.allclose(blends, seam.blend_radii_m, rtol=1e-5, atol=1e-9)
+        segments = np.linalg.norm(np.diff(entries[:, :3], axis=0), axis=1)
+        assert blends[-1] == 0.0 and blends[0] == 0.0
+        assert np.all(blends[1:-1] < np.minimum(segments[:-1], segments[1:]) / 2), "neighbouring blends never overlap"
+        assert blends.max() > 0.0, "the weld path is blended, not stop-and-go"
+        assert (on["index"], on["on"], on["moving"]) == (1, True, False)
+        assert_same_pose(on["tcp_pose"], seam.weld_poses[0], "arc on at the first weld pose")
+        assert (off["index"], off["on"], off["moving"]) == (1, False, False)
+        assert_same_pose(off["tcp_pose"], seam.weld_poses[-1], "arc off at the last weld pose")
+    rows = np.loadtxt(log, delimiter=",", skiprows=1)
+    assert len(rows) >= 4 and set(rows[:, 0]) == {0, 1}
+    for seam_id, seam in enumerate(plan.seams):
+        points = rows[rows[:, 0] == seam_id, 2:5]
+        polyline = seam.weld_poses[:, :3]
+        starts, ends = polyline[:-1], polyline[1:]
+        along = np.clip(np.einsum("ksd,sd->ks", points[:, None] - starts, ends - starts)
+                        / np.einsum("sd,sd->s", ends - starts, ends - starts), 0, 1)  # fmt: skip
+        distance = np.linalg.norm(points[:, None] - (starts + along[..., None] * (ends - starts)), axis=2).min(axis=1)
+        assert distance.max() < 1e-5, "the logged actual TCP lies on the weld path"
+
+
+def test_protective_stop_stops_switches_the_arc_off_and_names_the_waypoint(robot_sim, two_seams):
+    sim = robot_sim(speedup=100.0, faults=Faults(protective_stop_at=6))
+    result = weldseam("send", two_seams, "--host", sim.host, *SHAPING, "--yes")
+    assert result.returncode == 5
+    message = result.stderr.strip().splitlines()[-1]
+    assert "seam 0, waypoint 6 of" in message and "protective stop" in message and "arc off" in message, message
+    kinds = [event["event"] for event in sim.events]
+    after = kinds[kinds.index("protective_stop") + 1 :]
+    assert after == ["digital_output"] and sim.events[-1]["on"] is False, "arc off, and nothing moved again"
+
+
+def test_dropped_connection_fails_without_retry_and_says_the_arc_is_unconfirmed(robot_sim, two_seams):
+    sim = robot_sim(speedup=100.0, faults=Faults(disconnect_at=4))
+    started = time.monotonic()
+    result = weldseam("send", two_seams, "--host", sim.host, *SHAPING, "--yes")
+    assert result.returncode == 5
+    message = result.stderr.strip().splitlines()[-1]
+    assert "seam 0, waypoint" in message and "lost" in message and "NOT CONFIRMED OFF" in message, message
+    assert [event["event"] for event in sim.events][-1] == "disconnect"
+    assert time.monotonic() - started < 60
+
+
+def test_a_slow_controller_still_gets_the_whole_job(robot_sim, two_seams):
+    sim = robot_sim(speedup=100.0, faults=Faults(latency_s=0.02))
+    result = weldseam("send", two_seams, "--host", sim.host, *SHAPING, "--yes")
+    assert result.returncode == 0, result.stderr
+    assert [event["event"] for event in events_of(sim, "path", "digital_output")] == [
+        "digital_output", "path", "digital_output"] * 2  # fmt: skip
+
+
+def test_sigterm_mid_weld_stops_the_arm_then_switches_the_arc_off(robot_sim, two_seams):
+    sim = robot_sim(speedup=1.0)
+    command = [sys.executable, "-m", "weldseam.cli", "send", two_seams, "--host", sim.host, *SHAPING, "--yes"]
+    process = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                               text=True)  # fmt: skip
+    try:
+        assert sim.wait_for("path", timeout_s=60) is not None
+        time.sleep(0.3)
+        process.send_signal(signal.SIGTERM)
+        _, stderr = process.communicate(timeout=30)
+    finally:
+        process.kill()
+    assert process.returncode == 130, stderr
+    kinds = [event["event"] for event in sim.events]
+    assert kinds[kinds.index("path") + 1 :] == ["stopl", "digital_output"]
+    assert sim.events[-1]["on"] is False
+    stopped_at = np.array(sim.events[-2]["tcp_pose"])
+    assert_same_pose(sim.events[-1]["tcp_pose"], stopped_at, "the arm stays where it stopped")
+
+
+def test_refusals_reach_no_controller(robot_sim, two_seams):
+    sim = robot_sim(speedup=100.0)
+    unreachable = weldseam("send", two_seams, "--host", sim.host, "--robot-base", "3,0,0,0,0,0", "--yes")
+    assert unreachable.returncode == 4 and "refusing to move" in unreachable.stderr
+    unconfirmed = weldseam("send", two_seams, "--host", sim.host, *SHAPING)
+    assert unconfirmed.returncode == 2 and "--yes" in unconfirmed.stderr
+    assert sim.events == []
