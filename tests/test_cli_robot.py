@@ -82,3 +82,30 @@ def test_send_to_a_bad_host_fails_with_one_line(path_file):
     assert result.returncode == 5
     assert result.stderr.splitlines()[-1].startswith("Error: cannot connect to 127.0.0.254:30004")
     assert "Traceback" not in result.stderr
+
+
+def test_robot_sim_binds_loopback_only():
+    result = run("robot-sim", "--host", "10.1.2.3")
+    assert result.returncode == 2
+    assert result.stderr.strip() == "Error: robot-sim binds loopback addresses only (127.0.0.0/8), not 10.1.2.3"
+
+
+def test_robot_sim_serves_until_interrupted_then_leaves_its_log(tmp_path):
+    import signal
+    import time
+
+    log = tmp_path / "sim.json"
+    server = subprocess.Popen([sys.executable, "-m", "weldseam.cli", "robot-sim", "--host", "127.0.0.9", "--log",
+                               str(log)], stderr=subprocess.PIPE, text=True)  # fmt: skip
+    try:
+        deadline = time.monotonic() + 30
+        while not log.exists() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        busy = run("robot-sim", "--host", "127.0.0.9")
+        assert busy.returncode == 2 and "cannot listen on 127.0.0.9" in busy.stderr
+    finally:
+        server.send_signal(signal.SIGINT)
+        _, stderr = server.communicate(timeout=30)
+    assert server.returncode == 0, stderr
+    record = json.loads(log.read_text())
+    assert record["host"] == "127.0.0.9" and record["robot"] == "ur5" and record["events"] == []
