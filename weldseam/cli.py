@@ -7,7 +7,7 @@ from typing import Annotated, Optional
 import typer
 
 from weldseam import __version__
-from weldseam.commands import batch, compare, config, plan, report, robot, robot_sim
+from weldseam.commands import batch, calibrate, compare, config, plan, report, robot, robot_sim
 from weldseam.commands.common import EXIT_TABLE
 
 app = typer.Typer(
@@ -26,6 +26,7 @@ app.command("batch", epilog=batch.EPILOG)(batch.batch)
 app.command("compare", epilog=compare.EPILOG)(compare.compare)
 app.command("report", epilog=report.EPILOG)(report.report)
 app.add_typer(config.app, name="config")
+app.add_typer(calibrate.calibrate_app, name="calibrate")
 
 
 def _version(value: bool) -> None:

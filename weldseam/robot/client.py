@@ -18,6 +18,7 @@ from weldseam.robot.motion import pose_matrices
 
 POLL_S = 0.008
 START_TIMEOUT_S = 2.0
+CAUSE_WAIT_S = 0.1
 OUTPUT_TIMEOUT_S = 1.0
 STOP_DECELERATION_M_S2 = 2.0
 ARRIVED_M, ARRIVED_RAD = 1e-4, 2e-3
@@ -118,8 +119,11 @@ class UrClient:
         """Raise RobotFault if the connection is gone, the arm is protective-stopped or the program stopped."""
         self._check_connection(what)
         try:
-            protective_stop = self._receive.isProtectiveStopped()
             running = self._control.isProgramRunning()
+            # The receive stream may report the stop's cause a cycle after the control stream saw the program end.
+            deadline = time.monotonic() + (0.0 if running else CAUSE_WAIT_S)
+            while not (protective_stop := self._receive.isProtectiveStopped()) and time.monotonic() < deadline:
+                time.sleep(POLL_S)
         except RuntimeError:
             self._check_connection(what)
             raise
