@@ -167,3 +167,17 @@ def test_refusals_reach_no_controller(robot_sim, two_seams):
     unconfirmed = weldseam("send", two_seams, "--host", sim.host, *SHAPING)
     assert unconfirmed.returncode == 2 and "--yes" in unconfirmed.stderr
     assert sim.events == []
+
+
+def test_a_pose_the_controller_cannot_reach_stops_the_job_before_any_weld(robot_sim, two_seams):
+    """`send --robot ur10` checks against a UR10's reach; the controller is a UR5 and refuses (its IK fails)."""
+    sim = robot_sim(speedup=100.0, robot="ur5")
+    far = ["--robot-base", "0.95,0.1,0.05,0,0,0", "--standoff-mm", "12", "--robot", "ur10"]
+    assert weldseam("check", two_seams, *far).returncode == 0
+    assert weldseam("check", two_seams, *far[:-1], "ur5").returncode == 4
+    result = weldseam("send", two_seams, "--host", sim.host, *far, "--arc-do", "1", "--yes")
+    assert result.returncode == 5
+    assert "control script stopped" in result.stderr and "arc off" in result.stderr, result.stderr
+    kinds = [event["event"] for event in sim.events]
+    assert "fault" in kinds and "path" not in kinds
+    assert not any(event["event"] == "digital_output" and event["on"] for event in sim.events), "the arc never lit"
