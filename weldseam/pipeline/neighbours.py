@@ -8,13 +8,20 @@ from scipy.spatial import cKDTree
 
 
 def radius_graph(points: np.ndarray, radius_m: float) -> sparse.csr_matrix:
-    """Symmetric 0/1 matrix (N, N): entry (i, j) = 1 when |p_i - p_j| <= radius_m, self included."""
+    """Symmetric 0/1 matrix (N, N): entry (i, j) = 1 when |p_i - p_j| <= radius_m, self included.
+
+    Column indices within a row are in no particular order (but the same for the same input).
+    """
     n = len(points)
     pairs = cKDTree(points, balanced_tree=False).query_pairs(radius_m, output_type="ndarray")
     self_index = np.arange(n)
     rows = np.concatenate([pairs[:, 0], pairs[:, 1], self_index])
     cols = np.concatenate([pairs[:, 1], pairs[:, 0], self_index])
-    return sparse.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n)).tocsr()
+    graph = sparse.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
+    # query_pairs gives each pair once, so there are no duplicates to sum: skipping that pass (and
+    # the per-row sort of column indices that comes with it) halves the build time.
+    graph.has_canonical_format = True
+    return graph.tocsr()
 
 
 def neighbour_mean(graph: sparse.csr_matrix, values: np.ndarray) -> np.ndarray:

@@ -27,6 +27,7 @@ from weldseam.geometry import unit
 V_GROOVE = "v_groove"
 FILLET = "fillet"
 
+PARALLEL_QUERY_MIN = 64
 
 @dataclass(frozen=True)
 class SectionFit:
@@ -73,7 +74,9 @@ def analyse_sections(
     fillet_min_leg_m: float,
 ) -> list[SectionFit]:
     """Fit every cross-section; `tree` is a cKDTree over the fine `points` (N, 3)."""
-    neighbourhoods = tree.query_ball_point(centres, half_width_m, workers=-1, return_sorted=True)
+    # Threads pay off only for many centres; seam extension asks for one at a time.
+    workers = -1 if len(centres) >= PARALLEL_QUERY_MIN else 1
+    neighbourhoods = tree.query_ball_point(centres, half_width_m, workers=workers, return_sorted=True)
     fits = []
     for centre, t, a, l, members in zip(centres, travel, axes, lateral, neighbourhoods):
         offsets = points[members] - centre
