@@ -33,6 +33,20 @@ class ConditionConfig:
 
 
 @dataclass(frozen=True)
+class MergeConfig:
+    refine: bool = _param(True, "several frames: refine each frame's pose by ICP against the frames before it")
+    icp_voxel_m: float = _param(0.004, "voxel of the points ICP aligns (and of the veil test)")
+    icp_max_distance_m: float = _param(0.015, "largest pose error ICP corrects (its first pairing distance)")
+    min_overlap: float = _param(
+        0.2, "a frame whose share of points on the earlier frames' surface is below this keeps its pose"
+    )
+    dedup_voxel_m: float = _param(0.003, "de-duplication voxel: in each, only the frame with most points is kept")
+    max_incidence_deg: float = _param(
+        80.0, "patches seen more edge-on than this are flying-pixel veils at depth edges and are dropped"
+    )
+
+
+@dataclass(frozen=True)
 class SmoothConfig:
     enabled: bool = _param(True, "bilateral smoothing along the normal (keeps creases)")
     radius_m: float = _param(0.006, "neighbourhood radius of the smoother")
@@ -133,6 +147,7 @@ class OutputConfig:
 @dataclass(frozen=True)
 class PlanConfig:
     condition: ConditionConfig = field(default_factory=ConditionConfig)
+    merge: MergeConfig = field(default_factory=MergeConfig)
     smooth: SmoothConfig = field(default_factory=SmoothConfig)
     normals: NormalsConfig = field(default_factory=NormalsConfig)
     descriptor: DescriptorConfig = field(default_factory=DescriptorConfig)

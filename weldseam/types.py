@@ -40,7 +40,8 @@ class Scan:
     """A point cloud in the base frame, with where the camera was (to orient normals).
 
     points_m: (N, 3) base-frame points in metres.
-    camera_origin_m: (3,) camera centre in the base frame, or None when unknown.
+    camera_origin_m: (3,) camera centre in the base frame, or (N, 3) one per point (frames
+        merged from several views: the camera that saw each point), or None when unknown.
     source: the file it came from ("-" for stdin), for messages and the output record.
     sha256: hex digest of the input bytes, recorded in the output.
     """

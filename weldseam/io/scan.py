@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import hashlib
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -11,7 +12,8 @@ from weldseam.errors import InputError
 from weldseam.geometry import transform_points
 from weldseam.io.clouds import read_cloud
 from weldseam.io.depth import backproject_depth, read_depth_png, read_intrinsics
-from weldseam.io.poses import read_camera_pose
+from weldseam.io.files import read_json
+from weldseam.io.poses import POSE_KEYS, FramePose, pose_from_json, read_camera_pose, read_pose_file
 from weldseam.types import Scan
 
 UNIT_SCALE = {"m": 1.0, "mm": 0.001}
@@ -24,6 +26,7 @@ def load_scan(
     *,
     intrinsics_path: str | None = None,
     camera_pose_path: str | None = None,
+    T_base_camera: np.ndarray | None = None,
     cloud_frame: str = "base",
     camera_origin_m: np.ndarray | None = None,
     units: str = "m",
@@ -33,16 +36,17 @@ def load_scan(
     `intrinsics_path`) and return it in the base frame with any notes for the user.
 
     A depth image, and a cloud with `cloud_frame="camera"`, are in the camera frame and are
-    mapped to the base frame by the `T_base_camera` of `camera_pose_path` (identity when
-    absent). The camera origin (to orient normals) is `camera_origin_m` if given, else the
-    pose's translation, else the camera frame's origin for camera-frame data, else unknown.
+    mapped to the base frame by `T_base_camera` (4, 4), or the one of `camera_pose_path`
+    (identity when neither is given). The camera origin (to orient normals) is
+    `camera_origin_m` if given, else the pose's translation, else the camera frame's origin
+    for camera-frame data, else unknown.
     """
     notes: list[str] = []
     if units not in UNIT_SCALE:
         raise InputError(f"--units must be m or mm, got {units!r}")
     if cloud_frame not in ("base", "camera"):
         raise InputError(f"--cloud-frame must be base or camera, got {cloud_frame!r}")
-    pose = read_camera_pose(camera_pose_path) if camera_pose_path else None
+    pose = read_camera_pose(camera_pose_path) if camera_pose_path else T_base_camera
     is_depth = source != "-" and Path(source).suffix.lower() == ".png"
     if is_depth:
         if intrinsics_path is None:
@@ -80,6 +84,51 @@ def load_scan(
     return Scan(points_m=points, camera_origin_m=origin, source=source, sha256=sha256), notes
 
 
+@dataclass(frozen=True, eq=False)
+class FrameSpec:
+    """One frame of a multi-frame plan: the scan, its intrinsics (depth images) and its pose."""
+
+    scan: str
+    intrinsics: str | None = None
+    pose: FramePose | None = None
+
+
+def read_frames_manifest(path: str | Path) -> tuple[list[FrameSpec], str | None]:
+    """Frames and hand-eye file of a manifest; relative paths are relative to its folder.
+
+    `{"hand_eye": "H.json", "frames": [{"scan": "f1.png", "intrinsics": "d415.json",
+    "joints_rad": [...]}, {"scan": "f2.png", "pose": "f2.pose.json"}, ...]}`: each frame has
+    a scan, intrinsics for a depth image, and its pose either inline (the keys of a pose
+    file) or as a pose file under "pose". "hand_eye" is optional.
+    """
+    data = read_json(path, "a frames manifest")
+    folder = Path(path).parent
+    if not isinstance(data, dict) or not isinstance(data.get("frames"), list) or not data["frames"]:
+        raise InputError(f'{path}: expected a JSON object with a non-empty "frames" list')
+
+    def relative(value, key: str) -> str:
+        if not isinstance(value, str) or not value:
+            raise InputError(f"{path}: {key} must be a file name, got {value!r}")
+        return str(folder / value)
+
+    hand_eye = relative(data["hand_eye"], "hand_eye") if data.get("hand_eye") is not None else None
+    frames = []
+    for index, frame in enumerate(data["frames"]):
+        where = f"frames[{index}]"
+        if not isinstance(frame, dict) or "scan" not in frame:
+            raise InputError(f'{path}: {where} must be an object with "scan" and a pose')
+        intrinsics = relative(frame["intrinsics"], f"{where}.intrinsics") if "intrinsics" in frame else None
+        inline = [key for key in POSE_KEYS if key in frame]
+        if "pose" in frame and inline:
+            raise InputError(f'{path}: {where} has both "pose" and {inline[0]}: give one')
+        if "pose" in frame:
+            pose = read_pose_file(relative(frame["pose"], f"{where}.pose"))
+        else:
+            pose = pose_from_json(frame, f"{path}: {where}") if inline else None
+        frames.append(FrameSpec(relative(frame["scan"], f"{where}.scan"), intrinsics, pose))
+    return frames, hand_eye
+
+
 def _check_units(source: str, points: np.ndarray, units: str) -> None:
     finite = points[np.isfinite(points).all(axis=1)]
     if len(finite) < 2:
@@ -90,4 +139,6 @@ def _check_units(source: str, points: np.ndarray, units: str) -> None:
         raise InputError(f"{source}: the cloud spans {extent:.4g} m, too large for a workpiece scan; {hint}")
     if extent < SMALLEST_PLAUSIBLE_EXTENT_M:
         hint = "it looks like metres: drop --units mm" if units == "mm" else "check the file's units"
-        raise InputError(f"{source}: the cloud spans only {extent * 1000:.4g} mm, too small for a workpiece scan; {hint}")
+        raise InputError(
+            f"{source}: the cloud spans only {extent * 1000:.4g} mm, too small for a workpiece scan; {hint}"
+        )

@@ -6,9 +6,11 @@ stage that fails is reported with that name.
 
 from __future__ import annotations
 
+import hashlib
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from contextlib import contextmanager
+from dataclasses import replace
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -16,11 +18,13 @@ from scipy.spatial import cKDTree
 from weldseam import __version__
 from weldseam.config import PlanConfig, config_to_dict
 from weldseam.errors import InputError, NoSeamError, StageError, WeldseamError
-from weldseam.geometry import unit
+from weldseam.geometry import transform_points, unit
+from weldseam.pipeline.assemble import assemble_seams
 from weldseam.pipeline.boundary import boundary_mask
 from weldseam.pipeline.condition import condition_points, sparse_points
 from weldseam.pipeline.descriptor import gradient_descriptor
 from weldseam.pipeline.grid import voxel_centroids
+from weldseam.pipeline.merge import merge_frames
 from weldseam.pipeline.neighbours import radius_graph
 from weldseam.pipeline.normals import estimate_normals
 from weldseam.pipeline.order import order_chains
@@ -30,7 +34,6 @@ from weldseam.pipeline.segment import automatic_threshold, cluster_candidates
 from weldseam.pipeline.smooth import smooth_points
 from weldseam.pipeline.support import find_support_plane
 from weldseam.pipeline.thinning import thin_points
-from weldseam.pipeline.assemble import assemble_seams
 from weldseam.pipeline.trace import TracedSeam, trace_chain
 from weldseam.types import RunResult, Scan, WeldPath
 
@@ -41,6 +44,7 @@ STAGES = (
 MIN_POINTS = 100
 SUPPORT_TOLERANCE_M = 0.002  # how far a point may lie from the table plane and be on it
 SUPPORT_BELOW_FRACTION = 0.05  # share of points allowed beyond the table (noise, outliers)
+ORIGIN_SAMPLE = 200_000  # scan points searched for the camera that saw each working point
 
 Dump = Callable[[str, np.ndarray, np.ndarray | None], None]
 
@@ -80,7 +84,7 @@ def plan_paths(
         if dump is not None:
             dump(name, points, values)
 
-    camera = scan.camera_origin_m
+    camera = None if scan.camera_origin_m is None else np.asarray(scan.camera_origin_m, dtype=np.float64)
     if camera is None:
         finite = scan.points_m[np.isfinite(scan.points_m).all(axis=1)]
         camera = (finite.mean(axis=0) if len(finite) else np.zeros(3)) + np.array([0.0, 0.0, 1.0])
@@ -114,6 +118,13 @@ def plan_paths(
             graphs = {radius: graph[kept][:, kept] for radius, graph in graphs.items()}
             working = working[kept]
 
+    working_camera = camera
+    if camera.shape not in ((3,), scan.points_m.shape):
+        raise InputError(f"{scan.source}: camera_origin_m must be (3,) or one (3,) per point, got {camera.shape}")
+    if camera.ndim == 2:  # one origin per scan point (merged frames)
+        timings["merge"] = 0.0
+        with stage("merge"):
+            working_camera = _nearest_origins(scan.points_m, camera, working)
     with stage("smooth"):
         if c.smooth.enabled:
             working = smooth_points(
@@ -122,7 +133,7 @@ def plan_paths(
             )
     emit("smooth", working)
     with stage("normals"):
-        normals = estimate_normals(working, neighbourhoods(c.normals.radius_m), camera_origin_m=camera)
+        normals = estimate_normals(working, neighbourhoods(c.normals.radius_m), camera_origin_m=working_camera)
     with stage("descriptor"):
         descriptor = gradient_descriptor(normals, neighbourhoods(c.descriptor.radius_m), variant=c.descriptor.variant)
     emit("descriptor", working, descriptor)
@@ -141,7 +152,7 @@ def plan_paths(
         support = None
         if c.section.ignore_support_corners:
             support = find_support_plane(
-                working, descriptor <= threshold, camera, tolerance_m=SUPPORT_TOLERANCE_M,
+                working, descriptor <= threshold, working_camera, tolerance_m=SUPPORT_TOLERANCE_M,
                 below_fraction=SUPPORT_BELOW_FRACTION,
             )
     emit("segment", working[np.concatenate(clusters)] if clusters else np.empty((0, 3)))
@@ -161,7 +172,9 @@ def plan_paths(
 
         band, band_normals = working[members], normals[members]
         with stage("boundary"):
-            rim = band[boundary_mask(band, band_normals, radius_m=c.boundary.radius_m, shift_ratio=c.boundary.shift_ratio)]
+            rim = band[boundary_mask(
+                band, band_normals, radius_m=c.boundary.radius_m, shift_ratio=c.boundary.shift_ratio
+            )]
         emit("boundary", rim)
         with stage("pairing"):
             midpoints, _ = pair_midpoints(
@@ -180,7 +193,9 @@ def plan_paths(
             chains = order_chains(nodes, link_m=c.order.link_m, min_branch_m=c.order.min_branch_m)
         with stage("section"):
             for chain in chains:
-                approx_axes = _approximate_torch_axes(chain.points, working, normals, working_tree, c.section.face_radius_m)
+                approx_axes = _approximate_torch_axes(
+                    chain.points, working, normals, working_tree, c.section.face_radius_m
+                )
                 traced += trace_chain(
                     chain, approx_axes, fine, fine_tree,
                     step_m=c.resample.spacing_m, max_gap_m=c.section.max_gap_m,
@@ -214,11 +229,91 @@ def plan_paths(
     record = {
         "weldseam_version": __version__,
         "input": {"path": scan.source, "sha256": scan.sha256, "points": int(len(scan.points_m))},
-        "camera_origin_m": [round(float(v), 9) for v in camera],
+        "camera_origin_m": np.round(_distinct_rows(camera), 9).tolist() if camera.ndim == 2
+        else [round(float(v), 9) for v in camera],
         "threshold": float(threshold),
         "params": config_to_dict(config),
     }
     return RunResult(paths=tuple(paths), record=record, timings_s=timings, warnings=tuple(warnings))
+
+
+def plan_frames(
+    frames: Sequence[Scan],
+    config: PlanConfig,
+    *,
+    source: str,
+    dump: Dump | None = None,
+    on_stage: Callable[[str], None] | None = None,
+    allow_empty: bool = False,
+) -> RunResult:
+    """Merge several frames of one workpiece (each in the base frame with its (3,) camera
+    origin) with `merge_frames`, then run `plan_paths` on the merged cloud. The record's
+    input lists the frames with the ICP correction of each (how far it moved the frame's
+    centroid, mm, and its rotation, degrees); `source` names the whole (the manifest, or the
+    scans)."""
+    from scipy.spatial.transform import Rotation
+
+    if on_stage:
+        on_stage("merge")
+    if any(frame.camera_origin_m is None for frame in frames):
+        raise InputError(f"{source}: every frame needs its pose to be merged with the others")
+    start = time.perf_counter()
+    m = config.merge
+    try:
+        merged = merge_frames(
+            [frame.points_m for frame in frames], np.array([frame.camera_origin_m for frame in frames]),
+            dedup_voxel_m=m.dedup_voxel_m, icp_voxel_m=m.icp_voxel_m, icp_max_distance_m=m.icp_max_distance_m,
+            min_overlap=m.min_overlap, max_incidence_deg=m.max_incidence_deg, refine=m.refine,
+        )
+    except WeldseamError:
+        raise
+    except Exception as error:  # a numerical failure: name the stage
+        raise StageError("merge", f"{type(error).__name__}: {error}") from error
+    spent = time.perf_counter() - start
+    if dump is not None:
+        dump("merge", merged.points_m, merged.frame.astype(np.float64))
+    digest = hashlib.sha256("".join(frame.sha256 for frame in frames).encode()).hexdigest()
+    scan = Scan(points_m=merged.points_m, camera_origin_m=merged.camera_origins_m, source=source, sha256=digest)
+    result = plan_paths(scan, config, dump=dump, on_stage=on_stage, allow_empty=allow_empty)
+    warnings = [
+        f"{frame.source}: it overlaps the frames before it too little to refine its pose "
+        f"({overlap:.0%} of its points, merge.min_overlap {m.min_overlap:.0%}): its pose is used as given"
+        for k, (frame, overlap) in enumerate(zip(frames, merged.overlap))
+        if k > 0 and m.refine and not merged.refined[k]
+    ]
+    frames_record = [
+        {
+            "path": frame.source, "sha256": frame.sha256, "points": int(len(frame.points_m)),
+            "kept_points": int((merged.frame == k).sum()),
+            "icp_shift_mm": round(float(np.linalg.norm(transform_points(correction, centre) - centre)) * 1000, 6),
+            "icp_rotation_deg": round(float(np.degrees(Rotation.from_matrix(correction[:3, :3]).magnitude())), 6),
+        }
+        for k, (frame, correction) in enumerate(zip(frames, merged.corrections))
+        for centre in [np.nanmean(frame.points_m, axis=0, keepdims=True)]
+    ]
+    record = {**result.record, "input": {**result.record["input"], "frames": frames_record}}
+    timings = {"merge": spent + result.timings_s.get("merge", 0.0)}
+    timings.update((name, value) for name, value in result.timings_s.items() if name != "merge")
+    return replace(
+        result, record=record, timings_s=timings,
+        warnings=(*warnings, *result.warnings),
+    )
+
+
+def _nearest_origins(points: np.ndarray, origins: np.ndarray, queries: np.ndarray) -> np.ndarray:
+    """(Q, 3) camera origin of the scan point nearest each query, among an even subsample of at
+    most ORIGIN_SAMPLE finite points (merged frames own whole 3 mm voxels, so a point ~1 mm
+    away belongs to a camera that saw the same surface; any such camera orients it)."""
+    finite = np.flatnonzero(np.isfinite(points).all(axis=1))
+    finite = finite[:: max(1, -(-len(finite) // ORIGIN_SAMPLE))]
+    tree = cKDTree(points[finite], balanced_tree=False, compact_nodes=False)
+    return origins[finite[tree.query(queries, workers=-1)[1]]]
+
+
+def _distinct_rows(rows: np.ndarray) -> np.ndarray:
+    """The rows of (N, 3) `rows` where they change from the previous row (runs collapsed), in order."""
+    changes = np.r_[True, np.any(rows[1:] != rows[:-1], axis=1)]
+    return rows[changes]
 
 
 def _approximate_torch_axes(centres, points, normals, tree, radius_m) -> np.ndarray:

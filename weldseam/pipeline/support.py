@@ -13,6 +13,8 @@ def find_support_plane(
 ) -> tuple[np.ndarray, np.ndarray] | None:
     """(point, unit normal toward the camera) of the support plane, or None.
 
+    camera_origin_m: (3,), or (N, 3) one per point (merged frames: the camera that saw it).
+
     The largest plane through the `flat` points (RANSAC, fixed seed: deterministic) is
     the support when at most `below_fraction` of all points lie more than `tolerance_m`
     beyond it, away from the camera: everything else rests on it. A corner on that plane
@@ -32,10 +34,13 @@ def find_support_plane(
         return None
     distances = np.abs(np.einsum("kj,nj->kn", normals, sample) - np.sum(normals * origins, axis=1)[:, None])
     best = int(np.argmax((distances <= tolerance_m).sum(axis=1)))
-    inliers = candidates[np.abs((candidates - origins[best]) @ normals[best]) <= tolerance_m]
+    on_plane = np.abs((candidates - origins[best]) @ normals[best]) <= tolerance_m
+    inliers = candidates[on_plane]
     centre = inliers.mean(axis=0)
     normal = np.linalg.svd(inliers - centre, full_matrices=False)[2][2]
-    if normal @ (np.asarray(camera_origin_m) - centre) < 0:
+    cameras = np.asarray(camera_origin_m, dtype=np.float64)
+    toward = (cameras[flat][on_plane] - inliers).sum(axis=0) if cameras.ndim == 2 else cameras - centre
+    if normal @ toward < 0:
         normal = -normal
     beyond = (points - centre) @ normal < -tolerance_m
     return (centre, normal) if beyond.mean() <= below_fraction else None
