@@ -33,3 +33,4 @@ bench: setup
 	$(BIN)/python benchmarks/speed.py
 	$(BIN)/python benchmarks/accuracy.py
 	$(BIN)/python benchmarks/smoothing.py
+	$(BIN)/python benchmarks/merge.py

@@ -208,3 +208,17 @@ def test_the_readme_example_runs_on_a_generated_capture_set(tmp_path):
     assert result.exit_code == 0, result.stderr
     truth = json.loads((tmp_path / "calib/truth.json").read_text())
     assert_near(json.loads((tmp_path / "H.json").read_text())["T_base_camera"], np.array(truth["T_base_camera"]))
+
+
+@pytest.mark.parametrize("setup", ["eye_in_hand", "eye_to_hand"])
+def test_the_file_written_is_the_one_plan_reads(setup, request, tmp_path):
+    """calibrate's output goes straight into `plan --hand-eye`: read_hand_eye accepts it unchanged."""
+    from weldseam.io.hand_eye import read_hand_eye
+
+    manifest, truth = request.getfixturevalue(setup)
+    output = tmp_path / "H.json"
+    result = weldseam("calibrate", "hand-eye", manifest, "-o", output, "-q")
+    assert result.exit_code == 0, result.output
+    hand_eye = read_hand_eye(output)
+    assert hand_eye.setup == setup.replace("_", "-")
+    assert_near(hand_eye.transform, truth)

@@ -9,12 +9,18 @@ import json
 import numpy as np
 import pytest
 from PIL import Image
-from scipy.spatial.transform import Rotation
 
 from tests.test_cli import weldseam
 from weldseam.io.paths import read_paths
 from weldseam.synthetic.metrics import evaluate
-from weldseam.synthetic.multiview import box_groove_views, pipe_ring_views, pose_error, render_views, seen_by_any
+from weldseam.synthetic.multiview import (
+    box_groove_views,
+    pipe_ring_views,
+    pose_error,
+    render_views,
+    seen_by_any,
+    write_frame_set,
+)
 
 VIEWS = {"box": box_groove_views, "pipe": pipe_ring_views}
 # Seeds 0 and 1 of each scene (box: 3 views, pipe: 4 views), not chosen for passing.
@@ -36,9 +42,6 @@ def known_gap(request, planned, criterion):
         request.applymarker(pytest.mark.xfail(strict=True, reason="known gap"))
 
 
-T_FLANGE_CAMERA = np.array([[0.0, -1.0, 0.0, 0.03], [1.0, 0.0, 0.0, -0.06], [0.0, 0.0, 1.0, 0.05], [0, 0, 0, 1]])
-
-
 def write_intrinsics(path, intrinsics):
     i = intrinsics
     path.write_text(json.dumps(
@@ -58,16 +61,9 @@ def manifest_frames(folder, scans, poses):
 
 
 def sidecar_frames(folder, scans, poses):
-    """Depth PNGs each with NAME.pose.json holding the flange pose (UR pose vector) of an
-    eye-in-hand camera, intrinsics.json and the hand-eye file: `plan F0 F1 ... --hand-eye`."""
-    for index, (scan, pose) in enumerate(zip(scans, poses)):
-        Image.fromarray(scan.depth).save(folder / f"f{index}.png")
-        flange = pose @ np.linalg.inv(T_FLANGE_CAMERA)
-        vector = np.r_[flange[:3, 3], Rotation.from_matrix(flange[:3, :3]).as_rotvec()]
-        (folder / f"f{index}.pose.json").write_text(json.dumps({"flange_pose": vector.tolist()}))
-    write_intrinsics(folder / "intrinsics.json", scans[0].intrinsics)
-    (folder / "H.json").write_text(json.dumps({"setup": "eye-in-hand", "T_flange_camera": T_FLANGE_CAMERA.tolist()}))
-    return [*(folder / f"f{index}.png" for index in range(len(scans))), "--hand-eye", folder / "H.json"]
+    """Depth PNGs each with NAME.pose.json holding the flange pose of an eye-in-hand camera,
+    intrinsics.json and the hand-eye file: `plan F0 F1 ... --hand-eye`."""
+    return [*write_frame_set(folder, scans, poses), "--hand-eye", folder / "H.json"]
 
 
 @pytest.fixture(scope="module", params=CASES, ids=lambda p: f"{p[0]}-{p[1]}-{'pose-error' if p[2] else 'exact'}")

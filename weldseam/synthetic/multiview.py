@@ -7,6 +7,9 @@ Units: metres and radians; base frame z up, table top at z = 0 (as in scenes.py)
 from __future__ import annotations
 
 import dataclasses
+import json
+import sys
+from pathlib import Path
 
 import numpy as np
 import trimesh
@@ -116,3 +119,48 @@ def pose_error(rng: np.random.Generator, translation_m: float = 0.002, rotation_
     error = _rotation(axis, np.radians(rotation_deg))
     error[:3, 3] = translation_m * direction
     return error
+
+
+# An eye-in-hand camera 50 mm out from the flange, turned 90 degrees about the flange axis.
+T_FLANGE_CAMERA = np.array([[0.0, -1.0, 0.0, 0.03], [1.0, 0.0, 0.0, -0.06], [0.0, 0.0, 1.0, 0.05], [0, 0, 0, 1]])
+SCENES = {"box": box_groove_views, "pipe": pipe_ring_views}
+
+
+def write_frame_set(folder, scans: list[SyntheticScan], poses: list[np.ndarray]) -> list[Path]:
+    """Write the frames as a camera on a robot would deliver them: fK.png (16-bit depth, mm),
+    fK.pose.json with the flange pose (UR pose vector) that puts the camera at poses[K] (4, 4)
+    through T_FLANGE_CAMERA, intrinsics.json and the hand-eye file H.json. Returns the PNG paths."""
+    from PIL import Image
+    from scipy.spatial.transform import Rotation
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    names = []
+    for index, (scan, pose) in enumerate(zip(scans, poses, strict=True)):
+        names.append(folder / f"f{index}.png")
+        Image.fromarray(scan.depth).save(names[-1])
+        flange = pose @ np.linalg.inv(T_FLANGE_CAMERA)
+        vector = np.r_[flange[:3, 3], Rotation.from_matrix(flange[:3, :3]).as_rotvec()]
+        (folder / f"f{index}.pose.json").write_text(json.dumps({"flange_pose": vector.round(12).tolist()}) + "\n")
+    i = scans[0].intrinsics
+    (folder / "intrinsics.json").write_text(json.dumps(
+        {"width": i.width, "height": i.height, "fx": i.fx, "fy": i.fy, "cx": i.cx, "cy": i.cy, "depth_scale": 1000}
+    ) + "\n")  # fmt: skip
+    hand_eye = {"setup": "eye-in-hand", "T_flange_camera": T_FLANGE_CAMERA.tolist()}
+    (folder / "H.json").write_text(json.dumps(hand_eye) + "\n")
+    return names
+
+
+def main(argv: list[str]) -> None:
+    """`python -m weldseam.synthetic.multiview DIR [box|pipe] [SEED]`: render a scene's frames into DIR."""
+    if not 1 <= len(argv) <= 3 or (len(argv) > 1 and argv[1] not in SCENES):
+        sys.exit(main.__doc__)
+    rng = np.random.default_rng(int(argv[2]) if len(argv) > 2 else 1)
+    scene, cameras = SCENES[argv[1] if len(argv) > 1 else "pipe"](rng)
+    scans = render_views(scene, cameras, rng)
+    for name in write_frame_set(argv[0], scans, [scan.T_base_camera for scan in scans]):
+        print(name)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
