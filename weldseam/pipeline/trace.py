@@ -18,7 +18,6 @@ from weldseam.geometry import arc_lengths, polyline_length, unit
 from weldseam.pipeline.order import Chain
 from weldseam.pipeline.section import analyse_sections, section_frames
 
-
 PROBE_SECTIONS = 3
 END_BASELINE_M = 0.012
 
@@ -52,7 +51,9 @@ def trace_chain(
     """
     travel, axes, lateral = section_frames(chain.points, approx_axes, chain.closed)
     probes = np.unique(np.linspace(0, len(chain.points) - 1, PROBE_SECTIONS).round().astype(int))
-    probe_fits = analyse_sections(points, tree, chain.points[probes], travel[probes], axes[probes], lateral[probes], **section_params)
+    probe_fits = analyse_sections(
+        points, tree, chain.points[probes], travel[probes], axes[probes], lateral[probes], **section_params
+    )
     if not any(fit.joint for fit in probe_fits):
         return []
     fits = analyse_sections(points, tree, chain.points, travel, axes, lateral, **section_params)
@@ -132,8 +133,9 @@ def extend_seam(
     verified joint profile and the better estimate: near an end the prediction drifts by
     1-3 mm; the bound follows curves of radius down to ~40 mm across the largest gap), and
     within half a step along the torch axis (the surface does not jump; a section that
-    straddles the part's end face does). Run on joined seams only: extending every
-    partial trace would walk the same seam once per piece.
+    straddles the part's end face does). An extension stops where it comes within two steps
+    of the seam itself (it has gone round a loop; the ends then meet and the seam closes). Run
+    on joined seams only: extending every partial trace would walk the same seam once per piece.
     """
     if seam.closed or len(seam.positions_m) < 2:
         return seam
@@ -144,6 +146,9 @@ def extend_seam(
             axes.reverse()
         direction = end_direction(np.array(positions), at_start=False)
         last_point, last_axis = positions[-1], axes[-1]
+        # The seam away from this end: an extension that reaches it has gone round a loop.
+        arc = arc_lengths(np.array(positions))
+        elsewhere = np.array(positions)[arc < arc[-1] - 2 * END_BASELINE_M]
         for _ in range(int(max_extension_m / step_m)):
             distance = step_m
             while distance <= max_gap_m:
@@ -160,6 +165,8 @@ def extend_seam(
                     break
                 distance += step_m
             else:
+                break
+            if len(elsewhere) and np.min(np.linalg.norm(elsewhere - fit.point_m, axis=1)) <= 2 * step_m:
                 break
             positions.append(fit.point_m)
             axes.append(fit.torch_axis)
