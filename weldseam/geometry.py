@@ -55,3 +55,23 @@ def arc_lengths(points: np.ndarray, closed: bool = False) -> np.ndarray:
 def polyline_length(points: np.ndarray, closed: bool = False) -> float:
     """Length (m) of a polyline, including the closing segment of a loop."""
     return float(arc_lengths(points, closed)[-1]) if len(points) else 0.0
+
+
+def bend_corner(end_a, out_a, start_b, out_b, reach_m: float, min_turn_deg: float = 60.0) -> np.ndarray | None:
+    """Where two seam pieces meeting at a bend would meet if carried straight on: the midpoint
+    of the closest points of the rays end_a + s out_a and start_b + t out_b (s, t in 0..reach_m;
+    out_a, out_b unit, each pointing out of its piece). A groove over a block edge has a real
+    corner there, and the sections at the edge itself fail, so a straight bridge would cut the
+    corner by millimetres. None for turns under min_turn_deg."""
+    if -out_a @ out_b >= np.cos(np.radians(min_turn_deg)):
+        return None
+    cross = np.cross(out_a, out_b)
+    denominator = cross @ cross
+    if denominator < 1e-12:
+        return None
+    offset = start_b - end_a
+    s = np.cross(offset, out_b) @ cross / denominator
+    t = np.cross(offset, out_a) @ cross / denominator
+    if not (0.0 <= s <= reach_m and 0.0 <= t <= reach_m):
+        return None
+    return (end_a + s * out_a + start_b + t * out_b) / 2

@@ -41,3 +41,50 @@ def test_an_extension_round_a_loop_stops_where_it_meets_the_seam(rng):
     assert polyline_length(positions) > 0.9 * circumference, "the missing quarter is filled in"
     assert polyline_length(positions) < circumference, "and it does not go round a second time"
     assert np.linalg.norm(positions[0] - positions[-1]) <= 3 * STEP_M, "the ends meet, so the seam can close"
+
+
+def v_depth(across, half_open=0.006, depth=0.005):
+    return np.clip((half_open - np.abs(across)) * depth / half_open, 0, None)
+
+
+def grid(first, second, pitch=0.0008):
+    a, b = np.meshgrid(np.arange(*first, pitch), np.arange(*second, pitch))
+    return a.ravel(), b.ravel()
+
+
+def straight_trace(start_x, end_x, axis):
+    x = np.arange(start_x, end_x, STEP_M)
+    positions = np.column_stack([x, np.zeros(len(x)), np.zeros(len(x))])
+    return TracedSeam(positions, np.tile(axis, (len(x), 1)), False, "v_groove", 1.0)
+
+
+def extended(seam, points):
+    return extend_seam(seam, points, cKDTree(points), step_m=STEP_M, max_gap_m=0.012, max_extension_m=0.3,
+                       section_params=SECTION_PARAMS).positions_m  # fmt: skip
+
+
+def test_an_extension_follows_a_groove_over_a_block_edge_and_keeps_the_corner(rng):
+    """A groove along x on a block's top (z = 0, x <= 0) that runs on down its side face (x = 0)."""
+    x, y = grid((-0.08, 0.0), (-0.03, 0.03))
+    top = np.column_stack([x, y, -v_depth(y)])
+    z, y = grid((-0.07, 0.0), (-0.03, 0.03))
+    side = np.column_stack([-v_depth(y), y, z])
+    points = np.vstack([top, side]) + rng.normal(0, 0.0001, (len(top) + len(side), 3))
+    positions = extended(straight_trace(-0.06, -0.03, [0.0, 0.0, -1.0]), points)
+    down_the_side = positions[positions[:, 2] < -0.01]
+    assert len(down_the_side) > 10 and np.abs(down_the_side[:, :2]).max() < 0.0005
+    assert down_the_side[:, 2].min() < -0.05, "followed to near the side's bottom"
+    assert np.linalg.norm(positions, axis=1).min() < 0.001, "the corner itself is on the path"
+
+
+def test_an_extension_does_not_turn_down_a_plate_end(rng):
+    """A 10 mm plate (top z = 0, end face x = 0) on a table (z = -0.01): its groove ends at the plate end."""
+    x, y = grid((-0.08, 0.0), (-0.03, 0.03))
+    top = np.column_stack([x, y, -v_depth(y, depth=0.01)])
+    z, y = grid((-0.01, 0.0), (-0.03, 0.03))
+    end_face = np.column_stack([-v_depth(y, depth=0.01) * (z > -0.01), y, z])
+    x, y = grid((0.0, 0.06), (-0.03, 0.03))
+    table = np.column_stack([x, y, np.full(len(x), -0.01)])
+    points = np.vstack([top, end_face, table]) + rng.normal(0, 0.0001, (len(top) + len(end_face) + len(table), 3))
+    positions = extended(straight_trace(-0.06, -0.03, [0.0, 0.0, -1.0]), points)
+    assert positions[:, 2].min() > -0.002 and positions[:, 0].max() < 0.002, "the seam ends at the plate end"

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from weldseam.geometry import polyline_length, unit
+from weldseam.geometry import bend_corner, polyline_length, unit
 from weldseam.pipeline.section import FILLET
 from weldseam.pipeline.trace import END_BASELINE_M, TracedSeam, end_direction, extend_seam, seam_length
 
@@ -165,7 +165,8 @@ def _joined(
             axes_a = first.torch_axes[::-1] if first_reversed else first.torch_axes
             axes_b = second.torch_axes[::-1] if second_reversed else second.torch_axes
             weight = len(a) / (len(a) + len(b))
-            corner = _corner(a[-1], out_a, b[0], out_b, join_m) if min(polyline_length(a), polyline_length(b)) >= END_BASELINE_M else None
+            long_enough = min(polyline_length(a), polyline_length(b)) >= END_BASELINE_M
+            corner = bend_corner(a[-1], out_a, b[0], out_b, join_m) if long_enough else None
             bend_points = np.empty((0, 3)) if corner is None else corner[None]
             bend_axes = np.empty((0, 3)) if corner is None else unit(axes_a[-1] + axes_b[0])[None]
             best = (distance, TracedSeam(
@@ -176,25 +177,6 @@ def _joined(
                 confidence=round(weight * first.confidence + (1 - weight) * second.confidence, 3),
             ))
     return best
-
-
-def _corner(end_a, out_a, start_b, out_b, reach_m: float, min_turn_deg: float = 60.0) -> np.ndarray | None:
-    """Where two pieces meeting at a bend would meet if carried straight on: the midpoint of
-    the closest points of the rays end_a + s out_a and start_b + t out_b (s, t in 0..reach_m).
-    A groove over a block edge has a real corner there, and the sections at the edge itself
-    fail, so a straight bridge would cut the corner by millimetres. None for gentle turns."""
-    if -out_a @ out_b >= np.cos(np.radians(min_turn_deg)):
-        return None
-    cross = np.cross(out_a, out_b)
-    denominator = cross @ cross
-    if denominator < 1e-12:
-        return None
-    offset = start_b - end_a
-    s = np.cross(offset, out_b) @ cross / denominator
-    t = np.cross(offset, out_a) @ cross / denominator
-    if not (0.0 <= s <= reach_m and 0.0 <= t <= reach_m):
-        return None
-    return (end_a + s * out_a + start_b + t * out_b) / 2
 
 
 def split_at_junctions(seams: list[TracedSeam], *, tolerance_m: float) -> list[TracedSeam]:

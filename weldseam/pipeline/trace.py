@@ -13,13 +13,16 @@ from collections import Counter
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial import cKDTree
 
-from weldseam.geometry import arc_lengths, polyline_length, unit
+from weldseam.geometry import arc_lengths, bend_corner, polyline_length, unit
 from weldseam.pipeline.order import Chain
-from weldseam.pipeline.section import analyse_sections, section_frames
+from weldseam.pipeline.section import SectionFit, analyse_sections, section_frames
 
 PROBE_SECTIONS = 3
 END_BASELINE_M = 0.012
+# A turn over an edge counts once the seam goes on this far along the new face.
+TURN_CONFIRM_M = 0.024
 
 
 @dataclass(frozen=True)
@@ -133,50 +136,106 @@ def extend_seam(
     verified joint profile and the better estimate: near an end the prediction drifts by
     1-3 mm; the bound follows curves of radius down to ~40 mm across the largest gap), and
     within half a step along the torch axis (the surface does not jump; a section that
-    straddles the part's end face does). An extension stops where it comes within two steps
-    of the seam itself (it has gone round a loop; the ends then meet and the seam closes). Run
-    on joined seams only: extending every partial trace would walk the same seam once per piece.
+    straddles the part's end face does). Where the straight line finds nothing, the seam may
+    turn 90 degrees over an edge (a groove running over a block's edge, or up a wall): the
+    turned prediction is tried within max_gap_m of the end, and a run of fits there at least
+    TURN_CONFIRM_M long continues the seam on the new face. An extension stops where it comes
+    within two steps of the seam itself (it has gone round a loop; the ends then meet and the
+    seam closes). Run on joined seams only: extending every partial trace would walk the same
+    seam once per piece.
     """
     if seam.closed or len(seam.positions_m) < 2:
         return seam
     positions, axes = list(seam.positions_m), list(seam.torch_axes)
+    search = dict(points=points, tree=tree, joint=seam.joint, step_m=step_m, max_gap_m=max_gap_m,
+                  section_params=section_params)  # fmt: skip
     for at_start in (True, False):
         if at_start:
             positions.reverse()
             axes.reverse()
-        direction = end_direction(np.array(positions), at_start=False)
-        last_point, last_axis = positions[-1], axes[-1]
         # The seam away from this end: an extension that reaches it has gone round a loop.
         arc = arc_lengths(np.array(positions))
         elsewhere = np.array(positions)[arc < arc[-1] - 2 * END_BASELINE_M]
+        face_start = 0  # where the seam's current face begins (after a turn over an edge)
+        direction = end_direction(np.array(positions), at_start=False)
         for _ in range(int(max_extension_m / step_m)):
-            distance = step_m
-            while distance <= max_gap_m:
-                predicted = last_point + distance * direction
-                axis = unit(last_axis[None] - (last_axis @ direction) * direction[None])
-                fit = analyse_sections(
-                    points, tree, predicted[None], direction[None], axis, np.cross(direction[None], axis),
-                    **section_params,
-                )[0]
-                offset = fit.point_m - predicted
-                depth = abs(offset @ axis[0])
-                sideways = np.linalg.norm(offset - (offset @ axis[0]) * axis[0])
-                if fit.joint == seam.joint and sideways <= max(1.5 * step_m, 0.15 * distance) and depth <= 0.5 * step_m:
+            fit = _straight_fit(positions[-1], axes[-1], direction, **search)
+            fits = [fit]
+            if fit is None:
+                turned = _turned_run(positions[-1], axes[-1], direction, **search)
+                if turned is None:
                     break
-                distance += step_m
-            else:
+                fits, travel = turned
+                corner = bend_corner(positions[-1], direction, fits[0].point_m, -travel, max_gap_m + 3 * step_m)
+                if corner is not None:  # the sections at the edge itself fail: put the real corner in
+                    fits.insert(0, SectionFit(seam.joint, corner, unit(axes[-1] + fits[0].torch_axis)))
+                direction = travel
+                face_start = len(positions) + (corner is not None)
+            if len(elsewhere) and np.min(cKDTree(elsewhere).query([f.point_m for f in fits])[0]) <= 2 * step_m:
                 break
-            if len(elsewhere) and np.min(np.linalg.norm(elsewhere - fit.point_m, axis=1)) <= 2 * step_m:
-                break
-            positions.append(fit.point_m)
-            axes.append(fit.torch_axis)
-            # Re-aim along the last 12 mm: one 2 mm step alone is ~10 degrees noisy.
-            direction = end_direction(np.array(positions), at_start=False)
-            last_point, last_axis = fit.point_m, fit.torch_axis
+            positions += [f.point_m for f in fits]
+            axes += [f.torch_axis for f in fits]
+            # Re-aim along the last 12 mm of this face: one 2 mm step alone is ~10 degrees noisy.
+            if len(positions) - face_start >= 3:
+                direction = end_direction(np.array(positions[face_start:]), at_start=False)
         if at_start:
             positions.reverse()
             axes.reverse()
     return TracedSeam(np.array(positions), np.array(axes), False, seam.joint, seam.confidence)
+
+
+def _section_at(points, tree, predicted, travel, axis, section_params):
+    axis = unit(axis - (axis @ travel) * travel)
+    fit = analyse_sections(points, tree, predicted[None], travel[None], axis[None], np.cross(travel, axis)[None],
+                           **section_params)[0]  # fmt: skip
+    offset = fit.point_m - predicted
+    depth = abs(offset @ axis)
+    return fit, depth, np.linalg.norm(offset - (offset @ axis) * axis)
+
+
+def _straight_fit(last_point, last_axis, direction, *, points, tree, joint, step_m, max_gap_m, section_params):
+    """The next fit along the straight line from the end (stepping over failed sections), or None."""
+    distance = step_m
+    while distance <= max_gap_m:
+        fit, depth, sideways = _section_at(points, tree, last_point + distance * direction, direction, last_axis,
+                                           section_params)  # fmt: skip
+        if fit.joint == joint and sideways <= max(1.5 * step_m, 0.15 * distance) and depth <= 0.5 * step_m:
+            return fit
+        distance += step_m
+    return None
+
+
+def _turned_run(last_point, last_axis, direction, *, points, tree, joint, step_m, max_gap_m, section_params):
+    """(fits, new direction) of the seam on the face beyond a 90-degree edge, or None.
+
+    Over a convex edge (off a block's top, down its side) the travel turns into the old torch axis
+    and the torch axis into minus the old travel; at a concave corner (from the floor up a wall)
+    the travel turns against the old torch axis and the torch axis into the old travel. The edge
+    lies up to max_gap_m ahead; the first fit must sit on the turned line within 1.5 steps
+    sideways and half a step in depth, and the seam must go on along the new face for
+    TURN_CONFIRM_M: a plate's end face (under 12 mm tall) shows the groove's walls receding
+    like a groove for a few sections, a block's side carries the seam on.
+    """
+    axis = unit(last_axis - (last_axis @ direction) * direction)
+    for travel, new_axis in ((axis, -direction), (-axis, direction)):
+        for edge in np.arange(0.0, max_gap_m + step_m / 2, step_m):
+            corner = last_point + edge * direction
+            for beyond in (2 * step_m, 3 * step_m):
+                fit, depth, sideways = _section_at(points, tree, corner + beyond * travel, travel, new_axis,
+                                                   section_params)  # fmt: skip
+                if fit.joint != joint or sideways > 1.5 * step_m or depth > 0.5 * step_m:
+                    continue
+                run = [fit]
+                while np.linalg.norm(run[-1].point_m - run[0].point_m) < TURN_CONFIRM_M:
+                    following = _straight_fit(run[-1].point_m, run[-1].torch_axis, travel, points=points, tree=tree,
+                                              joint=joint, step_m=step_m, max_gap_m=max_gap_m,
+                                              section_params=section_params)  # fmt: skip
+                    if following is None:
+                        break
+                    run.append(following)
+                else:
+                    return run, travel
+    return None
 
 
 def seam_length(seam: TracedSeam) -> float:
