@@ -2,6 +2,7 @@
 
 import subprocess
 import sys
+import types
 
 import numpy as np
 import pytest
@@ -101,6 +102,12 @@ def test_missing_opencv_is_one_clear_line(monkeypatch):
     with pytest.raises(InputError) as error:
         require_opencv()
     assert str(error.value) == OPENCV_MISSING == "hand-eye calibration needs opencv: pip install 'weldseam[calibrate]'"
+
+
+def test_opencv_without_the_hand_eye_solvers_is_one_clear_line(monkeypatch):
+    monkeypatch.setitem(sys.modules, "cv2", types.SimpleNamespace(__version__="5.0.0"))
+    with pytest.raises(InputError, match=r"needs OpenCV 4.x \(found 5.0.0\)"):
+        require_opencv()
 
 
 def test_opencv_is_not_imported_with_weldseam():

@@ -26,6 +26,9 @@ def require_opencv():
         import cv2
     except ImportError:
         raise InputError(OPENCV_MISSING) from None
+    if not hasattr(cv2, "calibrateHandEye"):
+        raise InputError(f"hand-eye calibration needs OpenCV 4.x (found {cv2.__version__}): "
+                         "pip install 'weldseam[calibrate]'")  # fmt: skip
     return cv2
 
 
