@@ -22,6 +22,11 @@ SEND_EPILOG = (
     "Example:\n\n"
     "  weldseam send path.json --host 192.168.1.10 --robot-base 0.4,-0.2,0.1,0,0,0 --arc-do 0 --speed-mm-s 8\n\n"
     "  weldseam send path.json --host 127.0.0.2 --dry-run --script weld.script\n\n"
+    "Rehearse without a robot: start `weldseam robot-sim --host 127.0.0.2 --log sim.json` and send to "
+    "127.0.0.2; the log lists every command the controller received.\n\n"
+    "On a fault (protective stop, program stopped, IK refused, connection lost) send stops the arm, "
+    "switches the arc off, names the seam and waypoint and exits 5; it never retries. Ctrl-C or SIGTERM: "
+    "stopL, arc off, exit 130.\n\n"
     f"Exit codes:\n\n{EXIT_TABLE}"
 )
 
