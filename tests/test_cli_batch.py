@@ -146,3 +146,45 @@ def test_ctrl_c_stops_the_batch_and_leaves_no_half_written_file(captures, tmp_pa
     rows = summary_rows(out)
     assert 1 <= len(rows) < 6 and all(row["status"] == "ok" for row in rows.values())
     assert all((out / f"{Path(name).stem}.json").is_file() for name in rows)
+
+
+def test_robot_state_sidecars_with_a_hand_eye_file_plan_like_camera_poses(tmp_path):
+    """fillet_t.png placed by its T_base_camera sidecar, or by a flange pose sidecar and --hand-eye: same path."""
+    import numpy as np
+    from scipy.spatial.transform import Rotation
+
+    from weldseam.io.paths import read_paths
+
+    T_base_camera = np.array(json.loads((SAMPLES / "fillet_t.pose.json").read_text())["T_base_camera"])
+    T_flange_camera = np.eye(4)
+    T_flange_camera[:3, :3] = Rotation.from_euler("xyz", [1.0, -2.0, 90.0], degrees=True).as_matrix()
+    T_flange_camera[:3, 3] = [0.03, -0.06, 0.05]
+    flange = T_base_camera @ np.linalg.inv(T_flange_camera)
+    folders = {}
+    for name, pose in (("camera", {"T_base_camera": T_base_camera.tolist()}),
+                       ("robot", {"flange_pose": [*flange[:3, 3], *Rotation.from_matrix(flange[:3, :3]).as_rotvec()]})):
+        folder = folders[name] = tmp_path / name
+        folder.mkdir()
+        shutil.copy(SAMPLES / "fillet_t.png", folder / "fillet_t.png")
+        shutil.copy(SAMPLES / "d415.intrinsics.json", folder / "intrinsics.json")
+        (folder / "fillet_t.pose.json").write_text(json.dumps(pose))
+    hand_eye = tmp_path / "H.json"
+    hand_eye.write_text(json.dumps({"setup": "eye-in-hand", "T_flange_camera": T_flange_camera.tolist()}))
+    assert weldseam("batch", folders["camera"], "-o", tmp_path / "out_camera", "-q").returncode == 0
+    missing = weldseam("batch", folders["robot"], "-o", tmp_path / "out_missing", "-q")
+    assert missing.returncode == 1 and b"--hand-eye" in (tmp_path / "out_missing" / "summary.csv").read_bytes()
+    placed = weldseam("batch", folders["robot"], "-o", tmp_path / "out_robot", "--hand-eye", hand_eye, "-q")
+    assert placed.returncode == 0, placed.stderr.decode()
+    ours, theirs = (read_paths(tmp_path / out / "fillet_t.json") for out in ("out_robot", "out_camera"))
+    assert len(ours) == len(theirs) >= 1
+    for a, b in zip(ours, theirs, strict=True):
+        assert np.allclose(a.positions_m, b.positions_m, atol=1e-6)
+
+
+def test_a_bad_hand_eye_file_stops_the_batch_before_any_scan(captures, tmp_path):
+    bad = tmp_path / "H.json"
+    bad.write_text(json.dumps({"setup": "eye-in-hand"}))
+    result = weldseam("batch", captures, "-o", tmp_path / "out", "--hand-eye", bad)
+    assert result.returncode == 2
+    assert result.stderr.decode().strip() == f'Error: {bad}: an eye-in-hand file needs "T_flange_camera" (a 4x4 matrix)'
+    assert not (tmp_path / "out" / "summary.csv").exists()

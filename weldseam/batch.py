@@ -47,6 +47,7 @@ class BatchJob:
     units: str = "m"
     cloud_frame: str = "base"
     allow_empty: bool = False
+    hand_eye: str | None = None
 
 
 @dataclass(frozen=True)
@@ -114,8 +115,10 @@ def make_jobs(
     units: str,
     cloud_frame: str,
     allow_empty: bool,
+    hand_eye: Path | None = None,
 ) -> list[BatchJob]:
-    """One job per scan, with its output name and a fingerprint of everything that makes its output."""
+    """One job per scan, with its output name and a fingerprint of everything that makes its output
+    (the scan, its sidecars, the hand-eye file and the settings)."""
     taken: set[Path] = set()
     jobs = []
     settings = json.dumps([params, fmt, rotation, units, cloud_frame, allow_empty], sort_keys=True)
@@ -128,7 +131,7 @@ def make_jobs(
         taken.add(name)
         intrinsics, pose = sidecars(scan)
         digest = hashlib.sha256(settings.encode())
-        for part in (scan, intrinsics, pose):
+        for part in (scan, intrinsics, pose, hand_eye):
             digest.update(b"\0" if part is None else _file_digest(part))
         jobs.append(
             BatchJob(
@@ -144,9 +147,22 @@ def make_jobs(
                 units=units,
                 cloud_frame=cloud_frame,
                 allow_empty=allow_empty,
+                hand_eye=None if hand_eye is None else str(hand_eye.resolve()),
             )
         )
     return jobs
+
+
+def _camera_pose(job: BatchJob):
+    """T_base_camera (4, 4) from the scan's pose sidecar (camera pose, flange pose or joints) and the
+    hand-eye file, or None when neither places the camera."""
+    from weldseam.io.hand_eye import camera_pose, read_hand_eye
+    from weldseam.io.poses import read_pose_file
+    from weldseam.robot.kinematics import ROBOTS, forward
+
+    pose = read_pose_file(job.camera_pose) if job.camera_pose else None
+    hand_eye = read_hand_eye(job.hand_eye) if job.hand_eye else None
+    return camera_pose(pose, hand_eye, lambda joints: forward(ROBOTS["ur5"], joints))[0]
 
 
 def _file_digest(path: Path) -> bytes:
@@ -168,7 +184,7 @@ def run_job(job: BatchJob) -> JobResult:
         scan, _ = load_scan(
             job.scan_file,
             intrinsics_path=job.intrinsics,
-            camera_pose_path=job.camera_pose,
+            T_base_camera=_camera_pose(job),
             cloud_frame=job.cloud_frame,
             units=job.units,
         )

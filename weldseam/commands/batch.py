@@ -17,7 +17,8 @@ EPILOG = (
     "  weldseam batch 'cell3/**/*.png' extra.ply -o paths/ --format csv --jobs 2 --config cell3.toml\n\n"
     "  weldseam batch captures/ -o paths/ --scheduler tcp://10.0.0.5:8786\n\n"
     "Sidecars, next to each scan: NAME.intrinsics.json, else intrinsics.json, else the only\n"
-    "*.intrinsics.json in the folder (depth images); NAME.pose.json, else pose.json (optional).\n"
+    "*.intrinsics.json in the folder (depth images); NAME.pose.json, else pose.json (optional):\n"
+    '{"T_base_camera": 4x4}, or the robot state {"flange_pose": [...]} / {"joints_rad": [...]} with --hand-eye.\n'
     "Outputs: OUTDIR/NAME.json (or .csv), OUTDIR/summary.csv and summary.json. Scans whose\n"
     "output is up to date (same scan, sidecars and settings) are skipped unless --force.\n\n"
     "Exit codes:\n\n"
@@ -46,6 +47,9 @@ def batch(
         Optional[list[str]], typer.Option("--set", help="Override a parameter: section.key=value (repeatable).")
     ] = None,
     allow_empty: Annotated[bool, typer.Option(help="A scan with no seam gets an empty path and counts as ok.")] = False,
+    hand_eye: Annotated[
+        Optional[Path], typer.Option(help="Hand-eye file: places scans whose pose sidecar gives the robot state.")
+    ] = None,
     scheduler: Annotated[
         Optional[str], typer.Option(help="Run on a dask.distributed cluster at this address (tcp://HOST:PORT).")
     ] = None,
@@ -56,7 +60,10 @@ def batch(
         from weldseam.batch import find_scans, make_jobs, run_batch
         from weldseam.config import config_to_dict, effective_config
         from weldseam.errors import InputError
+        from weldseam.io.hand_eye import read_hand_eye
 
+        if hand_eye is not None:
+            read_hand_eye(hand_eye)  # a bad file stops the batch before any scan
         overrides = command_overrides(settings, fmt, rotation)
         config = effective_config(config_file, overrides)
         workers = jobs if jobs is not None else (os.cpu_count() or 1)
@@ -78,6 +85,7 @@ def batch(
             units=units,
             cloud_frame=cloud_frame,
             allow_empty=allow_empty,
+            hand_eye=hand_eye,
         )
         with _reporter(len(work), quiet) as on_result:
             results = run_batch(work, out_dir, workers=workers, scheduler=scheduler, force=force, on_result=on_result)
