@@ -211,30 +211,30 @@ def _turned_run(last_point, last_axis, direction, *, points, tree, joint, step_m
     Over a convex edge (off a block's top, down its side) the travel turns into the old torch axis
     and the torch axis into minus the old travel; at a concave corner (from the floor up a wall)
     the travel turns against the old torch axis and the torch axis into the old travel. The edge
-    lies up to max_gap_m ahead; the first fit must sit on the turned line within 1.5 steps
-    sideways and half a step in depth, and the seam must go on along the new face for
-    TURN_CONFIRM_M: a plate's end face (under 12 mm tall) shows the groove's walls receding
-    like a groove for a few sections, a block's side carries the seam on.
+    is sought up to max_gap_m ahead in two-step strides; the first fit, three steps past it, must
+    sit on the turned line within 1.5 steps sideways and one step in depth (half the stride), and
+    the seam must go on along the new face for TURN_CONFIRM_M: a plate's end face (under 12 mm
+    tall) shows the groove's walls receding like a groove for a few sections, a block's side
+    carries the seam on.
     """
     axis = unit(last_axis - (last_axis @ direction) * direction)
     for travel, new_axis in ((axis, -direction), (-axis, direction)):
-        for edge in np.arange(0.0, max_gap_m + step_m / 2, step_m):
+        for edge in np.arange(0.0, max_gap_m + step_m, 2 * step_m):
             corner = last_point + edge * direction
-            for beyond in (2 * step_m, 3 * step_m):
-                fit, depth, sideways = _section_at(points, tree, corner + beyond * travel, travel, new_axis,
-                                                   section_params)  # fmt: skip
-                if fit.joint != joint or sideways > 1.5 * step_m or depth > 0.5 * step_m:
-                    continue
-                run = [fit]
-                while np.linalg.norm(run[-1].point_m - run[0].point_m) < TURN_CONFIRM_M:
-                    following = _straight_fit(run[-1].point_m, run[-1].torch_axis, travel, points=points, tree=tree,
-                                              joint=joint, step_m=step_m, max_gap_m=max_gap_m,
-                                              section_params=section_params)  # fmt: skip
-                    if following is None:
-                        break
-                    run.append(following)
-                else:
-                    return run, travel
+            fit, depth, sideways = _section_at(points, tree, corner + 3 * step_m * travel, travel, new_axis,
+                                               section_params)  # fmt: skip
+            if fit.joint != joint or sideways > 1.5 * step_m or depth > step_m:
+                continue
+            run = [fit]
+            while np.linalg.norm(run[-1].point_m - run[0].point_m) < TURN_CONFIRM_M:
+                following = _straight_fit(run[-1].point_m, run[-1].torch_axis, travel, points=points, tree=tree,
+                                          joint=joint, step_m=step_m, max_gap_m=max_gap_m,
+                                          section_params=section_params)  # fmt: skip
+                if following is None:
+                    break
+                run.append(following)
+            else:
+                return run, travel
     return None
 
 
