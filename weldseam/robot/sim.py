@@ -15,6 +15,7 @@ import socket
 import struct
 import threading
 import time
+from itertools import accumulate
 from pathlib import Path
 
 from weldseam.errors import InputError
@@ -189,7 +190,8 @@ class RobotSim:
         def stream() -> None:
             while not self._stopping.is_set() and output:
                 if streaming.is_set():
-                    values = [v for name in output["names"] for v in self._field(name, output["types"])]
+                    snapshot = zip(self.controller.values(output["names"]), output["zeros"])
+                    values = [v for value, zero in snapshot for v in (zero if value is None else value)]
                     try:
                         send(wire.DATA, b"\x01" + output["struct"].pack(*values))
                     except OSError:
@@ -208,9 +210,9 @@ class RobotSim:
                 names = [name for name in payload[8:].decode().split(",") if name]
                 types = [wire.field_type(name) for name in names]
                 first = not output
-                output.update(names=names, types=dict(zip(names, types)), frequency=struct.unpack(">d", payload[:8])[0])
+                output.update(names=names, frequency=struct.unpack(">d", payload[:8])[0])
                 if "NOT_FOUND" not in types:
-                    output["struct"] = wire.recipe_struct(types)
+                    output.update(struct=wire.recipe_struct(types), zeros=[_zeros(kind) for kind in types])
                 send(kind, b"\x01" + ",".join(types).encode())
                 if first:
                     threading.Thread(target=stream, daemon=True).start()
@@ -218,31 +220,19 @@ class RobotSim:
                 names = [name for name in payload.decode().split(",") if name]
                 types = [wire.field_type(name) for name in names]
                 recipe = len(inputs) + 1
-                inputs[recipe] = (names, wire.recipe_struct(types) if "NOT_FOUND" not in types else None)
+                widths = [len(wire.STRUCT_CODES.get(kind, "")) for kind in types]
+                inputs[recipe] = (names, widths, wire.recipe_struct(types) if "NOT_FOUND" not in types else None)
                 send(kind, bytes([recipe]) + ",".join(types).encode())
             elif kind in (wire.START, wire.PAUSE):
                 (streaming.set if kind == wire.START else streaming.clear)()
                 send(kind, b"\x01")
             elif kind == wire.DATA and payload and payload[0] in inputs:
-                names, layout = inputs[payload[0]]
+                names, widths, layout = inputs[payload[0]]
                 if layout is not None:
-                    self.controller.receive_inputs(self._unpacked(names, layout.unpack_from(payload, 1)))
-
-    def _field(self, name: str, types: dict[str, str]) -> tuple:
-        value = self.controller.value(name)
-        if value is not None:
-            return value
-        code = wire.STRUCT_CODES[types[name]]
-        return tuple(0.0 if c == "d" else 0 for c in code)
-
-    @staticmethod
-    def _unpacked(names: list[str], values: tuple) -> dict[str, tuple]:
-        out, index = {}, 0
-        for name in names:
-            width = len(wire.STRUCT_CODES[wire.field_type(name)])
-            out[name] = values[index : index + width]
-            index += width
-        return out
+                    values, ends = layout.unpack_from(payload, 1), list(accumulate(widths))
+                    self.controller.receive_inputs(
+                        {name: values[end - width : end] for name, width, end in zip(names, widths, ends)}
+                    )
 
     # -- script and dashboard -------------------------------------------------------------------------
     def _serve_script(self, connection: socket.socket) -> None:
@@ -293,3 +283,7 @@ class RobotSim:
             return "Protective stop releasing"
         return replies.get(request, f"{request}: ok")
 
+
+def _zeros(kind: str) -> tuple:
+    """The value of a field the sim does not model: zeros of its RTDE type."""
+    return tuple(0.0 if code == "d" else 0 for code in wire.STRUCT_CODES[kind])

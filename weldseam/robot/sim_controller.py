@@ -129,20 +129,17 @@ class SimController:
         self.async_changes = 0
 
     # -- what a client reads -------------------------------------------------------------------
-    def value(self, name: str):
-        """The current value of an RTDE output field, as a tuple."""
+    def values(self, names: list[str]) -> list[tuple | None]:
+        """The RTDE output fields `names`, one consistent snapshot: a tuple each, None where the sim has no model."""
         with self.lock:
-            if name.startswith("output_int_register_"):
-                return (self.out_int[int(name.rsplit("_", 1)[1])],)
-            if name.startswith("output_double_register_"):
-                return (self.out_double[int(name.rsplit("_", 1)[1])],)
             running = self.program_running
-            values = {
+            pose = tuple(pose_vectors(self.tcp))
+            state = {
                 "timestamp": (self.time_s,),
                 "actual_q": tuple(self.joints_rad),
                 "target_q": tuple(self.joints_rad),
-                "actual_TCP_pose": tuple(pose_vectors(self.tcp)),
-                "target_TCP_pose": tuple(pose_vectors(self.tcp)),
+                "actual_TCP_pose": pose,
+                "target_TCP_pose": pose,
                 "actual_digital_output_bits": (self.digital_outputs,),
                 "runtime_state": (RUNTIME_PLAYING if running else RUNTIME_STOPPED,),
                 "robot_status_bits": (STATUS_POWER_ON | (STATUS_PROGRAM_RUNNING if running else 0),),
@@ -157,7 +154,18 @@ class SimController:
                 "payload": (self.payload_kg,),
                 "payload_cog": tuple(self.payload_cog_m),
             }
-            return values.get(name)
+            return [self._register(name) or state.get(name) for name in names]
+
+    def value(self, name: str) -> tuple | None:
+        """One RTDE output field, as a tuple (None where the sim has no model)."""
+        return self.values([name])[0]
+
+    def _register(self, name: str) -> tuple | None:
+        if name.startswith("output_int_register_"):
+            return (self.out_int[int(name.rsplit("_", 1)[1])],)
+        if name.startswith("output_double_register_"):
+            return (self.out_double[int(name.rsplit("_", 1)[1])],)
+        return None
 
     def tcp_pose(self) -> list[float]:
         with self.lock:
