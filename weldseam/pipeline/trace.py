@@ -156,6 +156,7 @@ def extend_seam(
         # The seam away from this end: an extension that reaches it has gone round a loop.
         arc = arc_lengths(np.array(positions))
         elsewhere = np.array(positions)[arc < arc[-1] - 2 * END_BASELINE_M]
+        elsewhere_tree = cKDTree(elsewhere) if len(elsewhere) else None
         face_start = 0  # where the seam's current face begins (after a turn over an edge)
         direction = end_direction(np.array(positions), at_start=False)
         for _ in range(int(max_extension_m / step_m)):
@@ -171,7 +172,7 @@ def extend_seam(
                     fits.insert(0, SectionFit(seam.joint, corner, unit(axes[-1] + fits[0].torch_axis)))
                 direction = travel
                 face_start = len(positions) + (corner is not None)
-            if len(elsewhere) and np.min(cKDTree(elsewhere).query([f.point_m for f in fits])[0]) <= 2 * step_m:
+            if elsewhere_tree is not None and elsewhere_tree.query([f.point_m for f in fits])[0].min() <= 2 * step_m:
                 break
             positions += [f.point_m for f in fits]
             axes += [f.torch_axis for f in fits]
