@@ -158,11 +158,10 @@ def _camera_pose(job: BatchJob):
     hand-eye file, or None when neither places the camera."""
     from weldseam.io.hand_eye import camera_pose, read_hand_eye
     from weldseam.io.poses import read_pose_file
-    from weldseam.robot.kinematics import ROBOTS, forward
 
     pose = read_pose_file(job.camera_pose) if job.camera_pose else None
     hand_eye = read_hand_eye(job.hand_eye) if job.hand_eye else None
-    return camera_pose(pose, hand_eye, lambda joints: forward(ROBOTS["ur5"], joints))[0]
+    return camera_pose(pose, hand_eye)[0]
 
 
 def _file_digest(path: Path) -> bytes:

@@ -142,7 +142,7 @@ def plan(
             fixed_camera = calibration is not None and calibration.setup == "eye-to-hand"
             if len(specs) > 1 and spec.pose is None and not fixed_camera:
                 raise InputError(f"{spec.scan}: no pose: give {_sidecar_name(spec.scan)} or use a --frames manifest")
-            pose, pose_notes = camera_pose_of(spec.pose, calibration, _ur5_flange)
+            pose, pose_notes = camera_pose_of(spec.pose, calibration)
             frame, frame_notes = load_scan(
                 spec.scan, intrinsics_path=spec.intrinsics if spec.intrinsics is not None else intrinsics,
                 T_base_camera=pose, cloud_frame=cloud_frame, camera_origin_m=origin, units=units,
@@ -237,13 +237,6 @@ def _frame_specs(scans: list[str], manifest, camera_pose, flange_pose, joints, o
 def _sidecar_name(scan: str) -> str:
     path = Path(scan)
     return str(path.with_name(f"{path.name[: -len(path.suffix)] if path.suffix else path.name}.pose.json"))
-
-
-def _ur5_flange(joints_rad):
-    """T_base_flange (4, 4) of UR5 joint angles (6,) rad."""
-    from weldseam.robot.kinematics import ROBOTS, forward
-
-    return forward(ROBOTS["ur5"], joints_rad)
 
 
 def _write_report(target: str, scan, result, stages: dict) -> None:

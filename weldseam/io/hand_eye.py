@@ -48,13 +48,13 @@ def read_hand_eye(path: str | Path) -> HandEye:
 
 
 def camera_pose(
-    pose: FramePose | None, hand_eye: HandEye | None, forward: Callable[[np.ndarray], np.ndarray]
+    pose: FramePose | None, hand_eye: HandEye | None, forward: Callable[[np.ndarray], np.ndarray] | None = None
 ) -> tuple[np.ndarray | None, list[str]]:
     """T_base_camera (4, 4) of a frame, or None when neither says where the camera was, and
     notes for the user.
 
     pose: the frame's pose (camera pose, flange pose or joints); forward: joints (6,) rad ->
-    T_base_flange (4, 4), the arm's forward kinematics. A camera pose and a hand-eye file
+    T_base_flange (4, 4), the arm's forward kinematics (default: the UR5's). A camera pose and a hand-eye file
     together, or a robot state without a hand-eye file, raise InputError.
     """
     if pose is not None and pose.T_base_camera is not None:
@@ -76,5 +76,12 @@ def camera_pose(
         raise InputError(
             f"{hand_eye.source}: an eye-in-hand camera needs the robot state: --flange-pose or --joints"
         )
-    flange = pose.flange_pose if pose.flange_pose is not None else forward(pose.joints_rad)
+    flange = pose.flange_pose if pose.flange_pose is not None else (forward or _ur5_flange)(pose.joints_rad)
     return flange @ hand_eye.transform, []
+
+
+def _ur5_flange(joints_rad: np.ndarray) -> np.ndarray:
+    """T_base_flange (4, 4) of UR5 joint angles (6,) rad."""
+    from weldseam.robot.kinematics import ROBOTS, forward
+
+    return forward(ROBOTS["ur5"], joints_rad)
