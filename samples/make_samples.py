@@ -22,6 +22,7 @@ import numpy as np
 from PIL import Image
 
 from weldseam.io.clouds import write_ply
+from weldseam.io.depth import write_intrinsics
 from weldseam.pipeline.grid import voxel_centroids
 from weldseam.synthetic.scenes import FAMILIES, make_scan
 from weldseam.synthetic.sensor import D415
@@ -51,10 +52,7 @@ def truth_record(scene, scan) -> dict:
 
 def main() -> None:
     (HERE / "golden").mkdir(exist_ok=True)
-    write_json(HERE / "d415.intrinsics.json", {
-        "width": D415.width, "height": D415.height, "fx": D415.fx, "fy": D415.fy,
-        "cx": D415.cx, "cy": D415.cy, "depth_scale": D415.depth_scale,
-    })
+    write_intrinsics(HERE / "d415.intrinsics.json", D415)
     commands = {}
     for name, seed in SEEDS.items():
         rng = np.random.default_rng(seed)

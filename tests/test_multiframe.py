@@ -11,6 +11,7 @@ import pytest
 from PIL import Image
 
 from tests.test_cli import weldseam
+from weldseam.io.depth import write_intrinsics
 from weldseam.io.paths import read_paths
 from weldseam.synthetic.metrics import evaluate
 from weldseam.synthetic.multiview import (
@@ -39,13 +40,6 @@ KNOWN_GAPS = {
 def known_gap(request, planned, criterion):
     if criterion in KNOWN_GAPS.get(planned[4], ()):
         request.applymarker(pytest.mark.xfail(strict=True, reason="known gap"))
-
-
-def write_intrinsics(path, intrinsics):
-    i = intrinsics
-    path.write_text(json.dumps(
-        {"width": i.width, "height": i.height, "fx": i.fx, "fy": i.fy, "cx": i.cx, "cy": i.cy, "depth_scale": 1000}
-    ))
 
 
 def manifest_frames(folder, scans, poses):

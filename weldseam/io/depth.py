@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import json
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
 
 from weldseam.errors import InputError
+from weldseam.io.atomic import atomic_write
 from weldseam.io.files import read_json
 from weldseam.types import Intrinsics
 
@@ -69,6 +72,11 @@ def read_intrinsics(path: str | Path) -> Intrinsics:
         fx=values["fx"], fy=values["fy"], cx=values["cx"], cy=values["cy"],
         depth_scale=depth_scale,
     )
+
+
+def write_intrinsics(path: str | Path, intrinsics: Intrinsics) -> None:
+    """Write intrinsics in the format read_intrinsics reads (all seven keys, indented JSON), atomically."""
+    atomic_write(path, (json.dumps(asdict(intrinsics), indent=2) + "\n").encode())
 
 
 def backproject_depth(depth: np.ndarray, intrinsics: Intrinsics) -> np.ndarray:

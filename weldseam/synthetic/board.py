@@ -206,14 +206,12 @@ def write_capture_set(directory: str | Path, captures: HandEyeCaptures, *, joint
     pose as a UR pose vector, or, with `joints`, as UR5 joint angles (one inverse kinematics solution of the
     measured flange pose)."""
     cv2 = require_opencv()
+    from weldseam.io.depth import write_intrinsics
     from weldseam.robot.motion import pose_vectors
 
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
-    intrinsics = captures.intrinsics
-    (directory / "intrinsics.json").write_text(json.dumps({
-        "width": intrinsics.width, "height": intrinsics.height, "fx": intrinsics.fx, "fy": intrinsics.fy,
-        "cx": intrinsics.cx, "cy": intrinsics.cy}, indent=2) + "\n")  # fmt: skip
+    write_intrinsics(directory / "intrinsics.json", captures.intrinsics)
     entries = []
     for index, (image, pose) in enumerate(zip(captures.images, captures.flange_poses), start=1):
         name = f"cap{index:02d}.png"

@@ -133,6 +133,8 @@ def write_frame_set(folder, scans: list[SyntheticScan], poses: list[np.ndarray])
     from PIL import Image
     from scipy.spatial.transform import Rotation
 
+    from weldseam.io.depth import write_intrinsics
+
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     names = []
@@ -142,10 +144,7 @@ def write_frame_set(folder, scans: list[SyntheticScan], poses: list[np.ndarray])
         flange = pose @ np.linalg.inv(T_FLANGE_CAMERA)
         vector = np.r_[flange[:3, 3], Rotation.from_matrix(flange[:3, :3]).as_rotvec()]
         (folder / f"f{index}.pose.json").write_text(json.dumps({"flange_pose": vector.round(12).tolist()}) + "\n")
-    i = scans[0].intrinsics
-    (folder / "intrinsics.json").write_text(json.dumps(
-        {"width": i.width, "height": i.height, "fx": i.fx, "fy": i.fy, "cx": i.cx, "cy": i.cy, "depth_scale": 1000}
-    ) + "\n")  # fmt: skip
+    write_intrinsics(folder / "intrinsics.json", scans[0].intrinsics)
     hand_eye = {"setup": "eye-in-hand", "T_flange_camera": T_FLANGE_CAMERA.tolist()}
     (folder / "H.json").write_text(json.dumps(hand_eye) + "\n")
     return names
