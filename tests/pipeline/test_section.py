@@ -1,6 +1,8 @@
 import numpy as np
+from scipy.spatial import cKDTree
 
-from weldseam.pipeline.section import FILLET, V_GROOVE, fit_profile
+from weldseam.config import SectionConfig
+from weldseam.pipeline.section import FILLET, V_GROOVE, analyse_sections, fit_profile, section_params
 
 PARAMS = dict(face_radius_m=0.012, groove_min_depth_m=0.0015, fillet_min_leg_m=0.012)
 
@@ -80,3 +82,29 @@ def test_a_hole_with_vertical_walls_is_not_a_groove(rng):
     w = np.where(np.abs(u) < 0.006, -0.012, 0.0) + rng.normal(0, 0.0003, len(u))
     seen = (np.abs(u) < 0.004) | (np.abs(u) > 0.008)
     assert fit_profile(u[seen], w[seen], **PARAMS) is None
+
+
+def scan_lines(rows_x, rng, pitch=0.0005):
+    """A plate (top z = 0) with a V-groove along x at y = 0.004, scanned in lines across it at `rows_x`."""
+    y = np.arange(-0.03, 0.03, pitch)
+    z = v_groove(0.004)(y)
+    return np.vstack([np.column_stack([np.full(len(y), x), y, z + rng.normal(0, 0.0002, len(y))]) for x in rows_x])
+
+
+def section_at_origin(points):
+    params = section_params(SectionConfig(), voxel_m=0.001)
+    travel, axis = np.array([[1.0, 0.0, 0.0]]), np.array([[0.0, 0.0, -1.0]])
+    lateral = np.cross(travel, axis)
+    return analyse_sections(points, cKDTree(points), np.zeros((1, 3)), travel, axis, lateral, **params)[0]
+
+
+def test_a_section_between_sparse_scan_lines_takes_a_thicker_slab(rng):
+    points = scan_lines(np.arange(-0.042, 0.043, 0.004), rng)  # lines 2 mm either side of the section plane
+    fit = section_at_origin(points)
+    assert fit.joint == V_GROOVE
+    assert abs(fit.point_m[1] - 0.004) < 0.0005 and abs(fit.point_m[2]) < 0.0005
+
+
+def test_a_thicker_slab_never_reaches_back_from_past_the_part_end(rng):
+    points = scan_lines(np.arange(-0.042, 0.0, 0.004), rng)  # the part ends 2 mm before the section plane
+    assert section_at_origin(points).joint == ""

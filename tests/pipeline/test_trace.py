@@ -3,15 +3,12 @@ from scipy.spatial import cKDTree
 
 from weldseam.config import SectionConfig
 from weldseam.geometry import polyline_length
+from weldseam.pipeline.section import section_params
 from weldseam.pipeline.trace import TracedSeam, extend_seam
 
 RING_RADIUS_M = 0.05
 STEP_M = 0.002
-SECTION = SectionConfig()
-SECTION_PARAMS = dict(
-    half_width_m=SECTION.half_width_m, slab_m=SECTION.slab_m, face_radius_m=SECTION.face_radius_m,
-    groove_min_depth_m=SECTION.groove_min_depth_m, fillet_min_leg_m=SECTION.fillet_min_leg_m,
-)
+SECTION_PARAMS = section_params(SectionConfig(), voxel_m=0.001)
 
 
 def ring_groove_plate(rng, pitch=0.0008, half_open=0.006, depth=0.006):

@@ -30,6 +30,7 @@ from weldseam.pipeline.normals import estimate_normals
 from weldseam.pipeline.order import order_chains
 from weldseam.pipeline.pairing import pair_midpoints
 from weldseam.pipeline.resample import resample_seam
+from weldseam.pipeline.section import section_params
 from weldseam.pipeline.segment import automatic_threshold, cluster_candidates
 from weldseam.pipeline.smooth import smooth_points
 from weldseam.pipeline.support import find_support_plane
@@ -158,10 +159,7 @@ def plan_paths(
     emit("segment", working[np.concatenate(clusters)] if clusters else np.empty((0, 3)))
     working_tree = cKDTree(working)
 
-    section_params = dict(
-        half_width_m=c.section.half_width_m, slab_m=c.section.slab_m, face_radius_m=c.section.face_radius_m,
-        groove_min_depth_m=c.section.groove_min_depth_m, fillet_min_leg_m=c.section.fillet_min_leg_m,
-    )
+    params = section_params(c.section, c.condition.voxel_m)
     traced: list[TracedSeam] = []
     for members in clusters:
         in_cluster = np.zeros(len(working), dtype=bool)
@@ -199,7 +197,7 @@ def plan_paths(
                 traced += trace_chain(
                     chain, approx_axes, fine, fine_tree,
                     step_m=c.resample.spacing_m, max_gap_m=c.section.max_gap_m,
-                    min_valid_fraction=c.section.min_valid_fraction, section_params=section_params,
+                    min_valid_fraction=c.section.min_valid_fraction, section_params=params,
                 )
     with stage("section"):
         seams = assemble_seams(
@@ -207,7 +205,7 @@ def plan_paths(
             overlap_m=c.order.overlap_m, join_m=c.order.join_m, max_turn_deg=c.order.max_join_turn_deg,
             min_branch_m=c.order.min_branch_m, min_seam_length_m=c.segment.min_seam_length_m,
             step_m=c.resample.spacing_m, max_gap_m=c.section.max_gap_m,
-            max_extension_m=c.section.max_extension_m, section_params=section_params,
+            max_extension_m=c.section.max_extension_m, section_params=params,
         )
     paths = []
     with stage("resample"):

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from weldseam.config import SectionConfig
 from weldseam.geometry import unit
 
 V_GROOVE = "v_groove"
@@ -48,6 +49,16 @@ class _ProfileFit:
     axis_w: float
 
 
+def section_params(config: SectionConfig, voxel_m: float) -> dict:
+    """analyse_sections' keyword parameters from a SectionConfig. `min_points` is what a fully
+    sampled flat section holds at the fine voxel: (2 half_width / voxel) x (slab / voxel)."""
+    return dict(
+        half_width_m=config.half_width_m, slab_m=config.slab_m, face_radius_m=config.face_radius_m,
+        groove_min_depth_m=config.groove_min_depth_m, fillet_min_leg_m=config.fillet_min_leg_m,
+        min_points=round(2 * config.half_width_m * config.slab_m / voxel_m**2),
+    )
+
+
 def section_frames(centres: np.ndarray, axes: np.ndarray, closed: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Travel t (K, 3), torch axis a made perpendicular to t, and lateral l = t x a."""
     if closed:
@@ -72,8 +83,11 @@ def analyse_sections(
     face_radius_m: float,
     groove_min_depth_m: float,
     fillet_min_leg_m: float,
+    min_points: int,
 ) -> list[SectionFit]:
-    """Fit every cross-section; `tree` is a cKDTree over the fine `points` (N, 3)."""
+    """Fit every cross-section; `tree` is a cKDTree over the fine `points` (N, 3). A slab with
+    fewer than `min_points` points is taken twice as thick when the thicker slab's points lie
+    evenly on both sides of the section plane."""
     # Threads pay off only for many centres; seam extension asks for one at a time.
     workers = -1 if len(centres) >= PARALLEL_QUERY_MIN else 1
     neighbourhoods = tree.query_ball_point(centres, half_width_m, workers=workers, return_sorted=True)
@@ -81,7 +95,14 @@ def analyse_sections(
     for centre, t, a, l, members in zip(centres, travel, axes, lateral, neighbourhoods):
         offsets = points[members] - centre
         along, u, w = offsets @ t, offsets @ l, -(offsets @ a)
-        keep = (np.abs(along) <= slab_m / 2) & (np.abs(u) <= half_width_m) & (np.abs(w) <= half_width_m)
+        inside = (np.abs(u) <= half_width_m) & (np.abs(w) <= half_width_m)
+        keep = inside & (np.abs(along) <= slab_m / 2)
+        if keep.sum() < min_points:  # grazing or sparse data: a slab twice as thick (sagitta < 0.1 mm at r 50 mm)
+            thick = inside & (np.abs(along) <= slab_m)
+            ahead = np.count_nonzero(thick & (along > 0))
+            # ... only where the data lies on both sides of the plane (not past a part's end).
+            if 0.35 * thick.sum() <= ahead <= 0.65 * thick.sum():
+                keep = thick
         profile = fit_profile(
             u[keep], w[keep],
             face_radius_m=face_radius_m, groove_min_depth_m=groove_min_depth_m, fillet_min_leg_m=fillet_min_leg_m,
