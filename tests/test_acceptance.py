@@ -17,8 +17,6 @@ from weldseam.types import Scan
 
 SEEDS = (0, 1)
 KNOWN_GAPS = {
-    ("pipe_groove", 1): {"coverage"},
-    ("ring_groove", 1): {"coverage"},
     ("y_groove", 0): {"coverage"},
 }
 CASES = [(family, seed) for family in FAMILIES for seed in SEEDS]

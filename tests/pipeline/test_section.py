@@ -2,7 +2,15 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from weldseam.config import SectionConfig
-from weldseam.pipeline.section import FILLET, V_GROOVE, analyse_sections, fit_profile, section_params
+from weldseam.pipeline.section import (
+    FILLET,
+    V_GROOVE,
+    GrooveTemplate,
+    analyse_sections,
+    bridge_groove,
+    fit_profile,
+    section_params,
+)
 
 PARAMS = dict(face_radius_m=0.012, groove_min_depth_m=0.0015, fillet_min_leg_m=0.012)
 
@@ -108,3 +116,46 @@ def test_a_section_between_sparse_scan_lines_takes_a_thicker_slab(rng):
 def test_a_thicker_slab_never_reaches_back_from_past_the_part_end(rng):
     points = scan_lines(np.arange(-0.042, 0.0, 0.004), rng)  # the part ends 2 mm before the section plane
     assert section_at_origin(points).joint == ""
+
+
+TEMPLATE = GrooveTemplate(left_m=0.0067, right_m=0.0067)  # where the sections before saw the surface end
+
+
+def grooved_profile(rng, hole=None, pitch=0.0004):
+    """u, w, along of a groove centred at u = 0.0005, 0.5 mm off the predicted seam (surface ends
+    near -0.0065 and 0.0075), samples spread along the slab; `hole` (low, high) removes every
+    point with u inside it."""
+    u = np.arange(-0.025, 0.025, pitch)
+    w = v_groove(0.0005, half_open=0.007)(u) + rng.normal(0, 0.0002, len(u))
+    along = rng.uniform(-0.0015, 0.0015, len(u))
+    if hole is not None:
+        kept = (u < hole[0]) | (u > hole[1])
+        u, w, along = u[kept], w[kept], along[kept]
+    return u, w, along
+
+
+def test_bridging_places_the_seam_from_the_edge_left_beside_a_dropout(rng):
+    u, w, along = grooved_profile(rng, hole=(-0.005, 0.016))  # the right edge, the walls and 8 mm of surface lost
+    assert fit_profile(u, w, **PARAMS) is None
+    fit = bridge_groove(u, w, along, TEMPLATE, face_radius_m=0.012, groove_min_depth_m=0.0015)
+    assert fit.joint == V_GROOVE
+    assert abs(fit.u - 0.0005) < 0.0006 and abs(fit.w) < 0.0005 and fit.axis_w < -0.99
+
+
+def test_bridging_uses_both_edges_when_only_the_groove_is_lost(rng):
+    u, w, along = grooved_profile(rng, hole=(-0.006, 0.007))
+    assert fit_profile(u, w, **PARAMS) is None
+    fit = bridge_groove(u, w, along, TEMPLATE, face_radius_m=0.012, groove_min_depth_m=0.0015)
+    assert abs(fit.u - 0.0005) < 0.0006
+
+
+def test_bridging_refuses_what_is_not_a_groove_beside_a_hole(rng):
+    bridge = dict(face_radius_m=0.012, groove_min_depth_m=0.0015)
+    u, w, along = grooved_profile(rng, hole=(-0.005, 0.030))  # nothing beyond the hole: the plate's outer end
+    assert bridge_groove(u, w, along, TEMPLATE, **bridge) is None
+    flat_u = np.arange(-0.025, 0.025, 0.0004)
+    flat = (flat_u < -0.005) | (flat_u > 0.001)  # a hole in a flat plate: surface runs where the opening should be
+    assert bridge_groove(flat_u[flat], rng.normal(0, 0.0002, flat.sum()), rng.uniform(-0.0015, 0.0015, flat.sum()),
+                         GrooveTemplate(0.007, 0.007), **bridge) is None  # fmt: skip
+    u, w, along = grooved_profile(rng, hole=(-0.005, 0.016))
+    assert bridge_groove(u, w, np.abs(along), TEMPLATE, **bridge) is None  # all surface behind the plane: past the end

@@ -74,14 +74,30 @@ def test_an_extension_follows_a_groove_over_a_block_edge_and_keeps_the_corner(rn
     assert np.linalg.norm(positions, axis=1).min() < 0.001, "the corner itself is on the path"
 
 
-def test_an_extension_does_not_turn_down_a_plate_end(rng):
-    """A 10 mm plate (top z = 0, end face x = 0) on a table (z = -0.01): its groove ends at the plate end."""
+def plate_ending_on_a_table(rng):
+    """A 10 mm plate (top z = 0, end face x = 0) on a table (z = -0.01): its groove along x ends at the plate end."""
     x, y = grid((-0.08, 0.0), (-0.03, 0.03))
     top = np.column_stack([x, y, -v_depth(y, depth=0.01)])
     z, y = grid((-0.01, 0.0), (-0.03, 0.03))
     end_face = np.column_stack([-v_depth(y, depth=0.01) * (z > -0.01), y, z])
     x, y = grid((0.0, 0.06), (-0.03, 0.03))
     table = np.column_stack([x, y, np.full(len(x), -0.01)])
-    points = np.vstack([top, end_face, table]) + rng.normal(0, 0.0001, (len(top) + len(end_face) + len(table), 3))
-    positions = extended(straight_trace(-0.06, -0.03, [0.0, 0.0, -1.0]), points)
+    return np.vstack([top, end_face, table]) + rng.normal(0, 0.0001, (len(top) + len(end_face) + len(table), 3))
+
+
+def test_an_extension_does_not_turn_down_a_plate_end(rng):
+    positions = extended(straight_trace(-0.06, -0.03, [0.0, 0.0, -1.0]), plate_ending_on_a_table(rng))
     assert positions[:, 2].min() > -0.002 and positions[:, 0].max() < 0.002, "the seam ends at the plate end"
+
+
+def test_an_extension_bridges_a_dropout_over_one_edge_and_stops_at_the_plate_end(rng):
+    points = plate_ending_on_a_table(rng)
+    x, y, z = points.T
+    dropout = (x > -0.045) & (x < -0.012) & (y > -0.004) & (y < 0.016) & (z > -0.009)  # 33 mm: the right edge lost
+    positions = extended(straight_trace(-0.075, -0.055, [0.0, 0.0, -1.0]), points[~dropout])
+    across = positions[(positions[:, 0] > -0.043) & (positions[:, 0] < -0.014)]
+    assert np.diff(np.sort(across[:, 0])).max() < 2.5 * STEP_M, "no stretch of the dropout left without poses"
+    assert np.abs(across[:, 1:]).max() < 0.0005, "bridged on the groove"
+    # Sections that straddle the dropout's far boundary fit less well; they stay within 1.5 mm.
+    assert np.abs(positions[:, 1:]).max() < 0.0015
+    assert -0.007 < positions[:, 0].max() < 0.002, "goes on past the dropout to the plate end, not beyond it"

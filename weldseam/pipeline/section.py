@@ -29,15 +29,37 @@ V_GROOVE = "v_groove"
 FILLET = "fillet"
 
 PARALLEL_QUERY_MIN = 64
+# Bridging a dropout: how far a surface end may sit from where the template expects it, and
+# how far past it a hole must reach.
+BRIDGE_MARGIN_M = 0.0015
+BRIDGE_HOLE_M = 0.004
 
 @dataclass(frozen=True)
 class SectionFit:
     """One cross-section's result in 3D: joint kind ("v_groove", "fillet" or "" for no fit),
-    seam point (3,) in metres and unit torch axis (3,) into the work."""
+    seam point (3,) in metres, unit torch axis (3,) into the work, for a groove half the width
+    of its opening (m), and whether it was bridged over a dropout (bridge_section)."""
 
     joint: str
     point_m: np.ndarray
     torch_axis: np.ndarray
+    half_opening_m: float = 0.0
+    bridged: bool = False
+
+
+@dataclass(frozen=True)
+class GrooveTemplate:
+    """Where the plate surface ends beside a groove, as _surface_ends finds it: distances (m)
+    from the seam point to the last surface point on the left (-lateral) and right sides
+    (None: not seen)."""
+
+    left_m: float | None
+    right_m: float | None
+
+    def expected(self, side: int) -> float | None:
+        """The distance on `side` (-1 left, +1 right); a side not seen mirrors the other."""
+        own, other = (self.left_m, self.right_m) if side < 0 else (self.right_m, self.left_m)
+        return own if own is not None else other
 
 
 @dataclass(frozen=True)
@@ -47,6 +69,7 @@ class _ProfileFit:
     w: float
     axis_u: float
     axis_w: float
+    half_opening: float = 0.0
 
 
 def section_params(config: SectionConfig, voxel_m: float) -> dict:
@@ -85,35 +108,97 @@ def analyse_sections(
     fillet_min_leg_m: float,
     min_points: int,
 ) -> list[SectionFit]:
-    """Fit every cross-section; `tree` is a cKDTree over the fine `points` (N, 3). A slab with
-    fewer than `min_points` points is taken twice as thick when the thicker slab's points lie
-    evenly on both sides of the section plane."""
+    """Fit every cross-section; `tree` is a cKDTree over the fine `points` (N, 3)."""
     # Threads pay off only for many centres; seam extension asks for one at a time.
     workers = -1 if len(centres) >= PARALLEL_QUERY_MIN else 1
     neighbourhoods = tree.query_ball_point(centres, half_width_m, workers=workers, return_sorted=True)
     fits = []
-    for centre, t, a, l, members in zip(centres, travel, axes, lateral, neighbourhoods):
-        offsets = points[members] - centre
-        along, u, w = offsets @ t, offsets @ l, -(offsets @ a)
-        inside = (np.abs(u) <= half_width_m) & (np.abs(w) <= half_width_m)
-        keep = inside & (np.abs(along) <= slab_m / 2)
-        if keep.sum() < min_points:  # grazing or sparse data: a slab twice as thick (sagitta < 0.1 mm at r 50 mm)
-            thick = inside & (np.abs(along) <= slab_m)
-            ahead = np.count_nonzero(thick & (along > 0))
-            # ... only where the data lies on both sides of the plane (not past a part's end).
-            if 0.35 * thick.sum() <= ahead <= 0.65 * thick.sum():
-                keep = thick
+    for centre, t, a, lat, members in zip(centres, travel, axes, lateral, neighbourhoods):
+        u, w, _ = _profile(points[members] - centre, t, a, lat, half_width_m, slab_m, min_points)
         profile = fit_profile(
-            u[keep], w[keep],
-            face_radius_m=face_radius_m, groove_min_depth_m=groove_min_depth_m, fillet_min_leg_m=fillet_min_leg_m,
+            u, w, face_radius_m=face_radius_m, groove_min_depth_m=groove_min_depth_m, fillet_min_leg_m=fillet_min_leg_m,
         )
-        if profile is None:
-            fits.append(SectionFit("", centre, a))
-            continue
-        point = centre + profile.u * l - profile.w * a
-        axis = unit(profile.axis_u * l - profile.axis_w * a)
-        fits.append(SectionFit(profile.joint, point, axis))
+        fits.append(_to_3d(profile, centre, a, lat))
     return fits
+
+
+def groove_template(
+    points: np.ndarray,
+    tree,
+    fit: SectionFit,
+    travel: np.ndarray,
+    *,
+    half_width_m: float,
+    slab_m: float,
+    face_radius_m: float,
+    groove_min_depth_m: float,
+    fillet_min_leg_m: float,
+    min_points: int,
+) -> GrooveTemplate | None:
+    """Where the plate surface ends beside a fitted groove section, measured as bridge_section
+    measures it, or None when neither end is seen."""
+    axis = unit(fit.torch_axis - (fit.torch_axis @ travel) * travel)
+    lateral = np.cross(travel, axis)
+    members = tree.query_ball_point(fit.point_m, half_width_m, return_sorted=True)
+    u, w, _ = _profile(points[members] - fit.point_m, travel, axis, lateral, half_width_m, slab_m, min_points)
+    found = _surface_ends(u, w, fit.half_opening_m, fit.half_opening_m, groove_min_depth_m)
+    if found is None or not found[1]:
+        return None
+    ends = found[1]
+    return GrooveTemplate(-ends[-1] if -1 in ends else None, ends[1] if 1 in ends else None)
+
+
+def bridge_section(
+    points: np.ndarray,
+    tree,
+    centre: np.ndarray,
+    travel: np.ndarray,
+    axis: np.ndarray,
+    template: GrooveTemplate,
+    *,
+    half_width_m: float,
+    slab_m: float,
+    face_radius_m: float,
+    groove_min_depth_m: float,
+    fillet_min_leg_m: float,
+    min_points: int,
+) -> SectionFit:
+    """The section at `centre` (3,) of a V-groove whose surface ends are known from the sections
+    before (`template`), where a sensor dropout hides too much of it to fit (see bridge_groove)."""
+    lateral = np.cross(travel, axis)
+    members = tree.query_ball_point(centre, half_width_m, return_sorted=True)
+    u, w, along = _profile(points[members] - centre, travel, axis, lateral, half_width_m, slab_m, min_points)
+    profile = bridge_groove(u, w, along, template, face_radius_m=face_radius_m, groove_min_depth_m=groove_min_depth_m)
+    fit = _to_3d(profile, centre, axis, lateral)
+    return SectionFit(fit.joint, fit.point_m, fit.torch_axis, fit.half_opening_m, bridged=True)
+
+
+def _profile(offsets, t, a, lat, half_width_m, slab_m, min_points):
+    """(u, w, along) of the points (offsets from the centre, (N, 3)) in the slab across t:
+    u along lat, w along -a, along t. A slab with fewer than `min_points` is taken twice as
+    thick when the thicker slab's points lie evenly on both sides of the section plane (not so
+    just past a part's end)."""
+    along, u, w = offsets @ t, offsets @ lat, -(offsets @ a)
+    inside = (np.abs(u) <= half_width_m) & (np.abs(w) <= half_width_m)
+    keep = inside & (np.abs(along) <= slab_m / 2)
+    if keep.sum() < min_points:  # grazing or sparse data: a slab twice as thick (sagitta < 0.1 mm at r 50 mm)
+        thick = inside & (np.abs(along) <= slab_m)
+        if _balanced(along[thick]):
+            keep = thick
+    return u[keep], w[keep], along[keep]
+
+
+def _balanced(along: np.ndarray) -> bool:
+    """Whether 35-65 % of the points lie ahead of the section plane."""
+    return 0.35 * len(along) <= np.count_nonzero(along > 0) <= 0.65 * len(along)
+
+
+def _to_3d(profile: _ProfileFit | None, centre, a, lat) -> SectionFit:
+    if profile is None:
+        return SectionFit("", centre, a)
+    point = centre + profile.u * lat - profile.w * a
+    axis = unit(profile.axis_u * lat - profile.axis_w * a)
+    return SectionFit(profile.joint, point, axis, profile.half_opening)
 
 
 def fit_profile(
@@ -189,7 +274,82 @@ def _fit_groove(u: np.ndarray, w: np.ndarray, face_radius_m: float, min_depth_m:
         intercept, slope = _line(u[beside], w[beside])
     centre_u = (u_left + u_right) / 2
     norm = np.hypot(1.0, slope)
-    return _ProfileFit(V_GROOVE, centre_u, intercept + slope * centre_u, slope / norm, -1.0 / norm)
+    return _ProfileFit(V_GROOVE, centre_u, intercept + slope * centre_u, slope / norm, -1.0 / norm,
+                       (u_right - u_left) / 2)  # fmt: skip
+
+
+def bridge_groove(
+    u: np.ndarray, w: np.ndarray, along: np.ndarray, template: GrooveTemplate, *, face_radius_m: float,
+    groove_min_depth_m: float,
+) -> _ProfileFit | None:
+    """The groove in a profile where a dropout hides too much of it to fit (fit_profile found
+    nothing), from where the plate surface ends on either side (_surface_ends), or None.
+    `along` (m) places each point along the seam: the surface must lie evenly on both sides of
+    the section plane (a section just past the part's end is not bridged).
+
+    The sections before give the template: the surface ends `template.left_m` left and
+    `template.right_m` right of the seam point. With both ends seen (each within 1.5 mm of
+    where the template puts it, and agreeing on the seam point within 3 mm), the seam is the
+    mean of the two the template implies. With one seen (and measured in the template: a side
+    never measured cannot place the seam), the other side must be a hole: no
+    points at all from 1.5 mm inside to 4 mm outside its expected end, and surface again
+    beyond (a plate's outer or oblique end is not a hole); the seam is then where the seen end
+    puts it.
+    """
+    left, right = template.expected(-1), template.expected(1)
+    found = _surface_ends(u, w, left, right, groove_min_depth_m)
+    if found is None or not _balanced(along[found[0]]):
+        return None
+    surface, ends = found
+    measured = {-1: template.left_m, 1: template.right_m}
+    implied = {side: end - side * measured[side] for side, end in ends.items() if measured[side] is not None}
+    if len(implied) == 2:
+        if abs(implied[1] - implied[-1]) > 2 * BRIDGE_MARGIN_M:
+            return None
+        centre_u = (implied[1] + implied[-1]) / 2
+    elif len(implied) == 1 and len(ends) == 1:
+        ((seen, centre_u),) = implied.items()
+        hidden = -seen * (u - centre_u)
+        expected = template.expected(-seen)
+        if np.any((hidden > expected - BRIDGE_MARGIN_M) & (hidden < expected + BRIDGE_HOLE_M)):
+            return None
+        if np.count_nonzero(surface & (hidden >= expected + BRIDGE_HOLE_M)) < 4:
+            return None
+    else:
+        return None
+    half_opening = (left + right) / 2
+    beside = surface & (np.abs(u - centre_u) <= half_opening + face_radius_m)
+    intercept, slope = _line(u[beside], w[beside]) if beside.sum() >= 6 else _line(u[surface], w[surface])
+    norm = np.hypot(1.0, slope)
+    return _ProfileFit(V_GROOVE, float(centre_u), intercept + slope * centre_u, slope / norm, -1.0 / norm, half_opening)
+
+
+def _surface_ends(u, w, left_m: float, right_m: float, groove_min_depth_m: float):
+    """(surface mask, {side: u}) for a groove expected to span -left_m .. right_m: the plate
+    surface is a line fitted to the points beyond that span, its points within
+    max(3 sigma, 0.4 groove_min_depth) of it; the end on a side (-1 left, +1 right) is the
+    innermost surface point there, kept when it lies within BRIDGE_MARGIN_M of the expected
+    end with at least 4 surface points beyond it. None when the surface runs inside the span
+    (the groove has ended) or there is too little surface to fit."""
+    outer = (u < -left_m - BRIDGE_MARGIN_M) | (u > right_m + BRIDGE_MARGIN_M)
+    near_surface = outer & (np.abs(w) < groove_min_depth_m)
+    if near_surface.sum() < 6:
+        return None
+    intercept, slope = _line(u[near_surface], w[near_surface])
+    residual = w - (intercept + slope * u)
+    tolerance = max(3 * _noise(residual[near_surface]), 0.4 * groove_min_depth_m)
+    surface = np.abs(residual) < tolerance
+    if np.any(surface & (u > -left_m + BRIDGE_MARGIN_M) & (u < right_m - BRIDGE_MARGIN_M)):
+        return None
+    ends = {}
+    for side, expected in ((-1, left_m), (1, right_m)):
+        beyond = side * u
+        on_side = surface & (beyond > expected - BRIDGE_MARGIN_M)
+        if np.count_nonzero(on_side) >= 4:
+            end = beyond[on_side].min()
+            if abs(end - expected) <= BRIDGE_MARGIN_M:
+                ends[side] = float(side * end)
+    return surface, ends
 
 
 def _groove_edges(u, depth, groove, left_surface_end, right_surface_end) -> tuple[float, float] | None:

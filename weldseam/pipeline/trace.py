@@ -17,12 +17,23 @@ from scipy.spatial import cKDTree
 
 from weldseam.geometry import arc_lengths, bend_corner, polyline_length, unit
 from weldseam.pipeline.order import Chain
-from weldseam.pipeline.section import SectionFit, analyse_sections, section_frames
+from weldseam.pipeline.section import (
+    V_GROOVE,
+    GrooveTemplate,
+    SectionFit,
+    analyse_sections,
+    bridge_section,
+    groove_template,
+    section_frames,
+)
 
 PROBE_SECTIONS = 3
 END_BASELINE_M = 0.012
 # A turn over an edge counts once the seam goes on this far along the new face.
 TURN_CONFIRM_M = 0.024
+TANGENT_BASELINE_M = 0.032
+# The groove template a bridged section assumes: the median of this many latest fits.
+TEMPLATE_MEMORY = 6
 
 
 @dataclass(frozen=True)
@@ -124,6 +135,22 @@ def end_direction(points: np.ndarray, at_start: bool) -> np.ndarray:
     return unit(direction if direction @ chord >= 0 else -direction)
 
 
+def end_tangent(points: np.ndarray) -> np.ndarray:
+    """Unit tangent at the last of `points` (in travel order), pointing on: the derivative at the
+    end of a quadratic p(s) = a + b s + c s^2 fitted over the last TANGENT_BASELINE_M of arc.
+    A chord or principal direction over that stretch of a curve of radius R leans back by
+    baseline / 2R (0.1 rad over 12 mm at R = 60 mm), which is 0.2 mm sideways per 2 mm step."""
+    ordered = points[::-1]
+    arc = arc_lengths(ordered)
+    window = ordered[arc <= TANGENT_BASELINE_M]
+    if len(window) < 5:
+        return end_direction(points, at_start=False)
+    s = arc[: len(window)]
+    design = np.column_stack([np.ones_like(s), s, s * s])
+    coefficients = np.linalg.lstsq(design, window, rcond=None)[0]
+    return unit(-coefficients[1])
+
+
 def extend_seam(
     seam: TracedSeam, points, tree, *, step_m: float, max_gap_m: float, max_extension_m: float, section_params: dict
 ) -> TracedSeam:
@@ -158,9 +185,11 @@ def extend_seam(
         elsewhere = np.array(positions)[arc < arc[-1] - 2 * END_BASELINE_M]
         elsewhere_tree = cKDTree(elsewhere) if len(elsewhere) else None
         face_start = 0  # where the seam's current face begins (after a turn over an edge)
-        direction = end_direction(np.array(positions), at_start=False)
+        direction = end_tangent(np.array(positions))
+        bridged = [False] * len(positions)
+        templates = _end_templates(np.array(positions), np.array(axes), points, tree, seam.joint, section_params)
         for _ in range(int(max_extension_m / step_m)):
-            fit = _straight_fit(positions[-1], axes[-1], direction, **search)
+            fit = _straight_fit(positions[-1], axes[-1], direction, template=_median_template(templates), **search)
             fits = [fit]
             if fit is None:
                 turned = _turned_run(positions[-1], axes[-1], direction, **search)
@@ -176,9 +205,15 @@ def extend_seam(
                 break
             positions += [f.point_m for f in fits]
             axes += [f.torch_axis for f in fits]
-            # Re-aim along the last 12 mm of this face: one 2 mm step alone is ~10 degrees noisy.
-            if len(positions) - face_start >= 3:
-                direction = end_direction(np.array(positions[face_start:]), at_start=False)
+            bridged += [f.bridged for f in fits]
+            if seam.joint == V_GROOVE:
+                templates += [groove_template(points, tree, f, direction, **section_params)
+                              for f in fits if not f.bridged]  # fmt: skip
+            # Re-aim along this face (one 2 mm step alone is ~10 degrees noisy), by fitted sections
+            # only: a bridged point leans on one edge, and aiming by it would turn a small offset into a drift.
+            fitted = np.array(positions[face_start:])[~np.array(bridged[face_start:])]
+            if len(fitted) >= 3:
+                direction = end_tangent(fitted)
         if at_start:
             positions.reverse()
             axes.reverse()
@@ -194,16 +229,53 @@ def _section_at(points, tree, predicted, travel, axis, section_params):
     return fit, depth, np.linalg.norm(offset - (offset @ axis) * axis)
 
 
-def _straight_fit(last_point, last_axis, direction, *, points, tree, joint, step_m, max_gap_m, section_params):
-    """The next fit along the straight line from the end (stepping over failed sections), or None."""
+def _end_templates(positions, axes, points, tree, joint, section_params) -> list[GrooveTemplate | None]:
+    """Groove templates at the last TEMPLATE_MEMORY seam points (none for a fillet)."""
+    if joint != V_GROOVE:
+        return []
+    tail = slice(max(0, len(positions) - TEMPLATE_MEMORY), len(positions))
+    travel, tail_axes, lateral = section_frames(positions[tail], axes[tail], closed=False)
+    fits = analyse_sections(points, tree, positions[tail], travel, tail_axes, lateral, **section_params)
+    return [groove_template(points, tree, fit, t, **section_params)
+            for fit, t in zip(fits, travel) if fit.joint == V_GROOVE]  # fmt: skip
+
+
+def _median_template(templates: list[GrooveTemplate | None]) -> GrooveTemplate | None:
+    """Per side, the median of the latest TEMPLATE_MEMORY templates that measured it (None for a
+    side measured in fewer than half of them); None when neither side qualifies."""
+    recent = templates[-TEMPLATE_MEMORY:]
+    sides = []
+    for side in ("left_m", "right_m"):
+        measured = [getattr(t, side) for t in recent if t is not None and getattr(t, side) is not None]
+        sides.append(float(np.median(measured)) if len(measured) >= max(2, len(recent) / 2) else None)
+    return GrooveTemplate(*sides) if sides != [None, None] else None
+
+
+def _straight_fit(
+    last_point, last_axis, direction, *, points, tree, joint, step_m, max_gap_m, section_params, template=None
+):
+    """The next fit along the straight line from the end (stepping over failed sections), or None.
+    Where a section fails and the groove's template is known, a bridged fit (a dropout over
+    part of the groove) is tried at the same place."""
     distance = step_m
     while distance <= max_gap_m:
-        fit, depth, sideways = _section_at(points, tree, last_point + distance * direction, direction, last_axis,
-                                           section_params)  # fmt: skip
+        predicted = last_point + distance * direction
+        fit, depth, sideways = _section_at(points, tree, predicted, direction, last_axis, section_params)
+        if fit.joint != joint and template is not None:
+            fit, depth, sideways = _bridged_at(points, tree, predicted, direction, last_axis, template,
+                                               section_params)  # fmt: skip
         if fit.joint == joint and sideways <= max(1.5 * step_m, 0.15 * distance) and depth <= 0.5 * step_m:
             return fit
         distance += step_m
     return None
+
+
+def _bridged_at(points, tree, predicted, travel, axis, template, section_params):
+    axis = unit(axis - (axis @ travel) * travel)
+    fit = bridge_section(points, tree, predicted, travel, axis, template, **section_params)
+    offset = fit.point_m - predicted
+    depth = abs(offset @ axis)
+    return fit, depth, np.linalg.norm(offset - (offset @ axis) * axis)
 
 
 def _turned_run(last_point, last_axis, direction, *, points, tree, joint, step_m, max_gap_m, section_params):
