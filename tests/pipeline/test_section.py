@@ -103,7 +103,7 @@ def section_at_origin(points):
     params = section_params(SectionConfig(), voxel_m=0.001)
     travel, axis = np.array([[1.0, 0.0, 0.0]]), np.array([[0.0, 0.0, -1.0]])
     lateral = np.cross(travel, axis)
-    return analyse_sections(points, cKDTree(points), np.zeros((1, 3)), travel, axis, lateral, **params)[0]
+    return analyse_sections(points, cKDTree(points), np.zeros((1, 3)), travel, axis, lateral, params)[0]
 
 
 def test_a_section_between_sparse_scan_lines_takes_a_thicker_slab(rng):

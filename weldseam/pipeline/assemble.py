@@ -12,7 +12,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from weldseam.geometry import bend_corner, polyline_length, unit
-from weldseam.pipeline.section import FILLET
+from weldseam.pipeline.section import FILLET, SectionParams
 from weldseam.pipeline.trace import END_BASELINE_M, TracedSeam, end_direction, extend_seam, seam_length
 
 
@@ -31,7 +31,7 @@ def assemble_seams(
     step_m: float,
     max_gap_m: float,
     max_extension_m: float,
-    section_params: dict,
+    section_params: SectionParams,
 ) -> list[TracedSeam]:
     """The final seams from every chain's traces: fillets on the support plane dropped,
     overlaps trimmed, pieces joined, open ends extended (then trimmed and joined again,

@@ -72,10 +72,23 @@ class _ProfileFit:
     half_opening: float = 0.0
 
 
-def section_params(config: SectionConfig, voxel_m: float) -> dict:
-    """analyse_sections' keyword parameters from a SectionConfig. `min_points` is what a fully
-    sampled flat section holds at the fine voxel: (2 half_width / voxel) x (slab / voxel)."""
-    return dict(
+@dataclass(frozen=True)
+class SectionParams:
+    """Cross-section parameters (see SectionConfig); `min_points`: a slab holding fewer points
+    is taken twice as thick (sparse, grazing data)."""
+
+    half_width_m: float
+    slab_m: float
+    face_radius_m: float
+    groove_min_depth_m: float
+    fillet_min_leg_m: float
+    min_points: int
+
+
+def section_params(config: SectionConfig, voxel_m: float) -> SectionParams:
+    """The section parameters of a SectionConfig. `min_points` is what a fully sampled flat
+    section holds at the fine voxel: (2 half_width / voxel) x (slab / voxel)."""
+    return SectionParams(
         half_width_m=config.half_width_m, slab_m=config.slab_m, face_radius_m=config.face_radius_m,
         groove_min_depth_m=config.groove_min_depth_m, fillet_min_leg_m=config.fillet_min_leg_m,
         min_points=round(2 * config.half_width_m * config.slab_m / voxel_m**2),
@@ -100,48 +113,28 @@ def analyse_sections(
     travel: np.ndarray,
     axes: np.ndarray,
     lateral: np.ndarray,
-    *,
-    half_width_m: float,
-    slab_m: float,
-    face_radius_m: float,
-    groove_min_depth_m: float,
-    fillet_min_leg_m: float,
-    min_points: int,
+    params: SectionParams,
 ) -> list[SectionFit]:
     """Fit every cross-section; `tree` is a cKDTree over the fine `points` (N, 3)."""
     # Threads pay off only for many centres; seam extension asks for one at a time.
     workers = -1 if len(centres) >= PARALLEL_QUERY_MIN else 1
-    neighbourhoods = tree.query_ball_point(centres, half_width_m, workers=workers, return_sorted=True)
+    neighbourhoods = tree.query_ball_point(centres, params.half_width_m, workers=workers, return_sorted=True)
     fits = []
     for centre, t, a, lat, members in zip(centres, travel, axes, lateral, neighbourhoods):
-        u, w, _ = _profile(points[members] - centre, t, a, lat, half_width_m, slab_m, min_points)
+        u, w, _ = _profile(points[members] - centre, t, a, lat, params)
         profile = fit_profile(
-            u, w, face_radius_m=face_radius_m, groove_min_depth_m=groove_min_depth_m, fillet_min_leg_m=fillet_min_leg_m,
+            u, w, face_radius_m=params.face_radius_m, groove_min_depth_m=params.groove_min_depth_m,
+            fillet_min_leg_m=params.fillet_min_leg_m,
         )
         fits.append(_to_3d(profile, centre, a, lat))
     return fits
 
 
-def groove_template(
-    points: np.ndarray,
-    tree,
-    fit: SectionFit,
-    travel: np.ndarray,
-    *,
-    half_width_m: float,
-    slab_m: float,
-    face_radius_m: float,
-    groove_min_depth_m: float,
-    fillet_min_leg_m: float,
-    min_points: int,
-) -> GrooveTemplate | None:
-    """Where the plate surface ends beside a fitted groove section, measured as bridge_section
-    measures it, or None when neither end is seen."""
-    axis = unit(fit.torch_axis - (fit.torch_axis @ travel) * travel)
-    lateral = np.cross(travel, axis)
-    members = tree.query_ball_point(fit.point_m, half_width_m, return_sorted=True)
-    u, w, _ = _profile(points[members] - fit.point_m, travel, axis, lateral, half_width_m, slab_m, min_points)
-    found = _surface_ends(u, w, fit.half_opening_m, fit.half_opening_m, groove_min_depth_m)
+def groove_template(points: np.ndarray, tree, fit: SectionFit, travel: np.ndarray, params: SectionParams):
+    """Where the plate surface ends beside a fitted groove section (a GrooveTemplate), measured
+    as bridge_section measures it, or None when neither end is seen."""
+    u, w, _ = _profile_at(points, tree, fit.point_m, travel, fit.torch_axis, params)
+    found = _surface_ends(u, w, fit.half_opening_m, fit.half_opening_m, params.groove_min_depth_m)
     if found is None or not found[1]:
         return None
     ends = found[1]
@@ -149,40 +142,37 @@ def groove_template(
 
 
 def bridge_section(
-    points: np.ndarray,
-    tree,
-    centre: np.ndarray,
-    travel: np.ndarray,
-    axis: np.ndarray,
-    template: GrooveTemplate,
-    *,
-    half_width_m: float,
-    slab_m: float,
-    face_radius_m: float,
-    groove_min_depth_m: float,
-    fillet_min_leg_m: float,
-    min_points: int,
+    points: np.ndarray, tree, centre: np.ndarray, travel: np.ndarray, axis: np.ndarray, template: GrooveTemplate,
+    params: SectionParams,
 ) -> SectionFit:
     """The section at `centre` (3,) of a V-groove whose surface ends are known from the sections
     before (`template`), where a sensor dropout hides too much of it to fit (see bridge_groove)."""
-    lateral = np.cross(travel, axis)
-    members = tree.query_ball_point(centre, half_width_m, return_sorted=True)
-    u, w, along = _profile(points[members] - centre, travel, axis, lateral, half_width_m, slab_m, min_points)
-    profile = bridge_groove(u, w, along, template, face_radius_m=face_radius_m, groove_min_depth_m=groove_min_depth_m)
-    fit = _to_3d(profile, centre, axis, lateral)
+    axis = unit(axis - (axis @ travel) * travel)
+    u, w, along = _profile_at(points, tree, centre, travel, axis, params)
+    profile = bridge_groove(
+        u, w, along, template, face_radius_m=params.face_radius_m, groove_min_depth_m=params.groove_min_depth_m
+    )
+    fit = _to_3d(profile, centre, axis, np.cross(travel, axis))
     return SectionFit(fit.joint, fit.point_m, fit.torch_axis, fit.half_opening_m, bridged=True)
 
 
-def _profile(offsets, t, a, lat, half_width_m, slab_m, min_points):
+def _profile_at(points, tree, centre, travel, axis, params: SectionParams):
+    """_profile of the one section at `centre` across `travel` (axis made perpendicular to it)."""
+    axis = unit(axis - (axis @ travel) * travel)
+    members = tree.query_ball_point(centre, params.half_width_m, return_sorted=True)
+    return _profile(points[members] - centre, travel, axis, np.cross(travel, axis), params)
+
+
+def _profile(offsets, t, a, lat, params: SectionParams):
     """(u, w, along) of the points (offsets from the centre, (N, 3)) in the slab across t:
     u along lat, w along -a, along t. A slab with fewer than `min_points` is taken twice as
     thick when the thicker slab's points lie evenly on both sides of the section plane (not so
     just past a part's end)."""
     along, u, w = offsets @ t, offsets @ lat, -(offsets @ a)
-    inside = (np.abs(u) <= half_width_m) & (np.abs(w) <= half_width_m)
-    keep = inside & (np.abs(along) <= slab_m / 2)
-    if keep.sum() < min_points:  # grazing or sparse data: a slab twice as thick (sagitta < 0.1 mm at r 50 mm)
-        thick = inside & (np.abs(along) <= slab_m)
+    inside = (np.abs(u) <= params.half_width_m) & (np.abs(w) <= params.half_width_m)
+    keep = inside & (np.abs(along) <= params.slab_m / 2)
+    if keep.sum() < params.min_points:  # grazing or sparse data: a slab twice as thick (sagitta < 0.1 mm at r 50 mm)
+        thick = inside & (np.abs(along) <= params.slab_m)
         if _balanced(along[thick]):
             keep = thick
     return u[keep], w[keep], along[keep]

@@ -21,6 +21,7 @@ from weldseam.pipeline.section import (
     V_GROOVE,
     GrooveTemplate,
     SectionFit,
+    SectionParams,
     analyse_sections,
     bridge_section,
     groove_template,
@@ -56,7 +57,7 @@ def trace_chain(
     step_m: float,
     max_gap_m: float,
     min_valid_fraction: float,
-    section_params: dict,
+    section_params: SectionParams,
 ) -> list[TracedSeam]:
     """Seams found along one chain (none if the chain is not a seam).
 
@@ -66,11 +67,11 @@ def trace_chain(
     travel, axes, lateral = section_frames(chain.points, approx_axes, chain.closed)
     probes = np.unique(np.linspace(0, len(chain.points) - 1, PROBE_SECTIONS).round().astype(int))
     probe_fits = analyse_sections(
-        points, tree, chain.points[probes], travel[probes], axes[probes], lateral[probes], **section_params
+        points, tree, chain.points[probes], travel[probes], axes[probes], lateral[probes], section_params
     )
     if not any(fit.joint for fit in probe_fits):
         return []
-    fits = analyse_sections(points, tree, chain.points, travel, axes, lateral, **section_params)
+    fits = analyse_sections(points, tree, chain.points, travel, axes, lateral, section_params)
     kinds = Counter(fit.joint for fit in fits if fit.joint)
     if not kinds:
         return []
@@ -152,7 +153,8 @@ def end_tangent(points: np.ndarray) -> np.ndarray:
 
 
 def extend_seam(
-    seam: TracedSeam, points, tree, *, step_m: float, max_gap_m: float, max_extension_m: float, section_params: dict
+    seam: TracedSeam, points, tree, *, step_m: float, max_gap_m: float, max_extension_m: float,
+    section_params: SectionParams,
 ) -> TracedSeam:
     """The seam with sections added beyond both open ends while they fit its joint near
     the predicted place, so the path reaches the seam's real ends.
@@ -207,7 +209,7 @@ def extend_seam(
             axes += [f.torch_axis for f in fits]
             bridged += [f.bridged for f in fits]
             if seam.joint == V_GROOVE:
-                templates += [groove_template(points, tree, f, direction, **section_params)
+                templates += [groove_template(points, tree, f, direction, section_params)
                               for f in fits if not f.bridged]  # fmt: skip
             # Re-aim along this face (one 2 mm step alone is ~10 degrees noisy), by fitted sections
             # only: a bridged point leans on one edge, and aiming by it would turn a small offset into a drift.
@@ -220,10 +222,15 @@ def extend_seam(
     return TracedSeam(np.array(positions), np.array(axes), False, seam.joint, seam.confidence)
 
 
-def _section_at(points, tree, predicted, travel, axis, section_params):
+def _section_at(points, tree, predicted, travel, axis, section_params, template=None):
+    """(fit, depth, sideways) of the section at `predicted`: fitted, or with a template bridged;
+    depth and sideways are the fit's offsets (m) from the prediction along and across the axis."""
     axis = unit(axis - (axis @ travel) * travel)
-    fit = analyse_sections(points, tree, predicted[None], travel[None], axis[None], np.cross(travel, axis)[None],
-                           **section_params)[0]  # fmt: skip
+    if template is None:
+        fit = analyse_sections(points, tree, predicted[None], travel[None], axis[None], np.cross(travel, axis)[None],
+                               section_params)[0]  # fmt: skip
+    else:
+        fit = bridge_section(points, tree, predicted, travel, axis, template, section_params)
     offset = fit.point_m - predicted
     depth = abs(offset @ axis)
     return fit, depth, np.linalg.norm(offset - (offset @ axis) * axis)
@@ -235,8 +242,8 @@ def _end_templates(positions, axes, points, tree, joint, section_params) -> list
         return []
     tail = slice(max(0, len(positions) - TEMPLATE_MEMORY), len(positions))
     travel, tail_axes, lateral = section_frames(positions[tail], axes[tail], closed=False)
-    fits = analyse_sections(points, tree, positions[tail], travel, tail_axes, lateral, **section_params)
-    return [groove_template(points, tree, fit, t, **section_params)
+    fits = analyse_sections(points, tree, positions[tail], travel, tail_axes, lateral, section_params)
+    return [groove_template(points, tree, fit, t, section_params)
             for fit, t in zip(fits, travel) if fit.joint == V_GROOVE]  # fmt: skip
 
 
@@ -262,20 +269,11 @@ def _straight_fit(
         predicted = last_point + distance * direction
         fit, depth, sideways = _section_at(points, tree, predicted, direction, last_axis, section_params)
         if fit.joint != joint and template is not None:
-            fit, depth, sideways = _bridged_at(points, tree, predicted, direction, last_axis, template,
-                                               section_params)  # fmt: skip
+            fit, depth, sideways = _section_at(points, tree, predicted, direction, last_axis, section_params, template)
         if fit.joint == joint and sideways <= max(1.5 * step_m, 0.15 * distance) and depth <= 0.5 * step_m:
             return fit
         distance += step_m
     return None
-
-
-def _bridged_at(points, tree, predicted, travel, axis, template, section_params):
-    axis = unit(axis - (axis @ travel) * travel)
-    fit = bridge_section(points, tree, predicted, travel, axis, template, **section_params)
-    offset = fit.point_m - predicted
-    depth = abs(offset @ axis)
-    return fit, depth, np.linalg.norm(offset - (offset @ axis) * axis)
 
 
 def _turned_run(last_point, last_axis, direction, *, points, tree, joint, step_m, max_gap_m, section_params):
