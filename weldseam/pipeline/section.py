@@ -18,7 +18,7 @@ profile w(u) is fitted with two joint models:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -38,7 +38,7 @@ BRIDGE_HOLE_M = 0.004
 class SectionFit:
     """One cross-section's result in 3D: joint kind ("v_groove", "fillet" or "" for no fit),
     seam point (3,) in metres, unit torch axis (3,) into the work, for a groove half the width
-    of its opening (m), and whether it was bridged over a dropout (bridge_section)."""
+    of its opening (m), and whether it was bridged over a dropout (fit_section)."""
 
     joint: str
     point_m: np.ndarray
@@ -130,10 +130,32 @@ def analyse_sections(
     return fits
 
 
+def fit_section(
+    points: np.ndarray, tree, centre: np.ndarray, travel: np.ndarray, axis: np.ndarray, params: SectionParams,
+    template: GrooveTemplate | None = None,
+) -> SectionFit:
+    """The one section at `centre` (3,) across `travel`, `axis` made perpendicular to it. Where
+    no groove fits and the surface ends beside the groove are known from the sections before
+    (`template`), the section is bridged over a sensor dropout (see bridge_groove) from the
+    same profile."""
+    axis, lateral = _frame(travel, axis)
+    u, w, along = _profile_at(points, tree, centre, travel, axis, lateral, params)
+    profile = fit_profile(
+        u, w, face_radius_m=params.face_radius_m, groove_min_depth_m=params.groove_min_depth_m,
+        fillet_min_leg_m=params.fillet_min_leg_m,
+    )
+    if template is not None and (profile is None or profile.joint != V_GROOVE):
+        bridged = bridge_groove(
+            u, w, along, template, face_radius_m=params.face_radius_m, groove_min_depth_m=params.groove_min_depth_m
+        )
+        return replace(_to_3d(bridged, centre, axis, lateral), bridged=True)
+    return _to_3d(profile, centre, axis, lateral)
+
+
 def groove_template(points: np.ndarray, tree, fit: SectionFit, travel: np.ndarray, params: SectionParams):
     """Where the plate surface ends beside a fitted groove section (a GrooveTemplate), measured
-    as bridge_section measures it, or None when neither end is seen."""
-    u, w, _ = _profile_at(points, tree, fit.point_m, travel, fit.torch_axis, params)
+    as a bridged section measures it, or None when neither end is seen."""
+    u, w, _ = _profile_at(points, tree, fit.point_m, travel, *_frame(travel, fit.torch_axis), params)
     found = _surface_ends(u, w, fit.half_opening_m, fit.half_opening_m, params.groove_min_depth_m)
     if found is None or not found[1]:
         return None
@@ -141,26 +163,16 @@ def groove_template(points: np.ndarray, tree, fit: SectionFit, travel: np.ndarra
     return GrooveTemplate(-ends[-1] if -1 in ends else None, ends[1] if 1 in ends else None)
 
 
-def bridge_section(
-    points: np.ndarray, tree, centre: np.ndarray, travel: np.ndarray, axis: np.ndarray, template: GrooveTemplate,
-    params: SectionParams,
-) -> SectionFit:
-    """The section at `centre` (3,) of a V-groove whose surface ends are known from the sections
-    before (`template`), where a sensor dropout hides too much of it to fit (see bridge_groove)."""
+def _frame(travel: np.ndarray, axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The torch axis made perpendicular to `travel`, and the lateral direction travel x axis."""
     axis = unit(axis - (axis @ travel) * travel)
-    u, w, along = _profile_at(points, tree, centre, travel, axis, params)
-    profile = bridge_groove(
-        u, w, along, template, face_radius_m=params.face_radius_m, groove_min_depth_m=params.groove_min_depth_m
-    )
-    fit = _to_3d(profile, centre, axis, np.cross(travel, axis))
-    return SectionFit(fit.joint, fit.point_m, fit.torch_axis, fit.half_opening_m, bridged=True)
+    return axis, np.cross(travel, axis)
 
 
-def _profile_at(points, tree, centre, travel, axis, params: SectionParams):
-    """_profile of the one section at `centre` across `travel` (axis made perpendicular to it)."""
-    axis = unit(axis - (axis @ travel) * travel)
+def _profile_at(points, tree, centre, travel, axis, lateral, params: SectionParams):
+    """_profile of the one section at `centre`."""
     members = tree.query_ball_point(centre, params.half_width_m, return_sorted=True)
-    return _profile(points[members] - centre, travel, axis, np.cross(travel, axis), params)
+    return _profile(points[members] - centre, travel, axis, lateral, params)
 
 
 def _profile(offsets, t, a, lat, params: SectionParams):

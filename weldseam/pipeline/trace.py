@@ -23,7 +23,7 @@ from weldseam.pipeline.section import (
     SectionFit,
     SectionParams,
     analyse_sections,
-    bridge_section,
+    fit_section,
     groove_template,
     section_frames,
 )
@@ -223,14 +223,11 @@ def extend_seam(
 
 
 def _section_at(points, tree, predicted, travel, axis, section_params, template=None):
-    """(fit, depth, sideways) of the section at `predicted`: fitted, or with a template bridged;
-    depth and sideways are the fit's offsets (m) from the prediction along and across the axis."""
+    """(fit, depth, sideways) of the section at `predicted` (bridged with a template where it
+    does not fit); depth and sideways are the fit's offsets (m) from the prediction along and
+    across the axis."""
+    fit = fit_section(points, tree, predicted, travel, axis, section_params, template)
     axis = unit(axis - (axis @ travel) * travel)
-    if template is None:
-        fit = analyse_sections(points, tree, predicted[None], travel[None], axis[None], np.cross(travel, axis)[None],
-                               section_params)[0]  # fmt: skip
-    else:
-        fit = bridge_section(points, tree, predicted, travel, axis, template, section_params)
     offset = fit.point_m - predicted
     depth = abs(offset @ axis)
     return fit, depth, np.linalg.norm(offset - (offset @ axis) * axis)
@@ -262,14 +259,12 @@ def _straight_fit(
     last_point, last_axis, direction, *, points, tree, joint, step_m, max_gap_m, section_params, template=None
 ):
     """The next fit along the straight line from the end (stepping over failed sections), or None.
-    Where a section fails and the groove's template is known, a bridged fit (a dropout over
-    part of the groove) is tried at the same place."""
+    Where a section fails and the groove's template is known, it is bridged (a dropout over
+    part of the groove)."""
     distance = step_m
     while distance <= max_gap_m:
         predicted = last_point + distance * direction
-        fit, depth, sideways = _section_at(points, tree, predicted, direction, last_axis, section_params)
-        if fit.joint != joint and template is not None:
-            fit, depth, sideways = _section_at(points, tree, predicted, direction, last_axis, section_params, template)
+        fit, depth, sideways = _section_at(points, tree, predicted, direction, last_axis, section_params, template)
         if fit.joint == joint and sideways <= max(1.5 * step_m, 0.15 * distance) and depth <= 0.5 * step_m:
             return fit
         distance += step_m
