@@ -50,6 +50,23 @@ ORIGIN_SAMPLE = 200_000  # scan points searched for the camera that saw each wor
 Dump = Callable[[str, np.ndarray, np.ndarray | None], None]
 
 
+@contextmanager
+def _stage(name: str, timings: dict[str, float], on_stage: Callable[[str], None] | None):
+    """Run one stage: announce it, add its time to timings[name], and turn a numerical failure
+    inside it into a StageError that names it."""
+    if on_stage:
+        on_stage(name)
+    start = time.perf_counter()
+    try:
+        yield
+    except WeldseamError:
+        raise
+    except Exception as error:
+        raise StageError(name, f"{type(error).__name__}: {error}") from error
+    finally:
+        timings[name] = timings.get(name, 0.0) + time.perf_counter() - start
+
+
 def plan_paths(
     scan: Scan,
     config: PlanConfig,
@@ -67,19 +84,8 @@ def plan_paths(
     timings: dict[str, float] = {name: 0.0 for name in STAGES}
     warnings: list[str] = []
 
-    @contextmanager
     def stage(name: str):
-        if on_stage:
-            on_stage(name)
-        start = time.perf_counter()
-        try:
-            yield
-        except WeldseamError:
-            raise
-        except Exception as error:  # a numerical failure inside a stage: name the stage
-            raise StageError(name, f"{type(error).__name__}: {error}") from error
-        finally:
-            timings[name] += time.perf_counter() - start
+        return _stage(name, timings, on_stage)
 
     def emit(name: str, points: np.ndarray, values: np.ndarray | None = None) -> None:
         if dump is not None:
@@ -123,7 +129,6 @@ def plan_paths(
     if camera.shape not in ((3,), scan.points_m.shape):
         raise InputError(f"{scan.source}: camera_origin_m must be (3,) or one (3,) per point, got {camera.shape}")
     if camera.ndim == 2:  # one origin per scan point (merged frames)
-        timings["merge"] = 0.0
         with stage("merge"):
             working_camera = _nearest_origins(scan.points_m, camera, working)
     with stage("smooth"):
@@ -251,23 +256,16 @@ def plan_frames(
     scans)."""
     from scipy.spatial.transform import Rotation
 
-    if on_stage:
-        on_stage("merge")
     if any(frame.camera_origin_m is None for frame in frames):
         raise InputError(f"{source}: every frame needs its pose to be merged with the others")
-    start = time.perf_counter()
     m = config.merge
-    try:
+    spent: dict[str, float] = {}
+    with _stage("merge", spent, on_stage):
         merged = merge_frames(
             [frame.points_m for frame in frames], np.array([frame.camera_origin_m for frame in frames]),
             dedup_voxel_m=m.dedup_voxel_m, icp_voxel_m=m.icp_voxel_m, icp_max_distance_m=m.icp_max_distance_m,
             min_overlap=m.min_overlap, max_incidence_deg=m.max_incidence_deg, refine=m.refine,
         )
-    except WeldseamError:
-        raise
-    except Exception as error:  # a numerical failure: name the stage
-        raise StageError("merge", f"{type(error).__name__}: {error}") from error
-    spent = time.perf_counter() - start
     if dump is not None:
         dump("merge", merged.points_m, merged.frame.astype(np.float64))
     digest = hashlib.sha256("".join(frame.sha256 for frame in frames).encode()).hexdigest()
@@ -290,7 +288,7 @@ def plan_frames(
         for centre in [np.nanmean(frame.points_m, axis=0, keepdims=True)]
     ]
     record = {**result.record, "input": {**result.record["input"], "frames": frames_record}}
-    timings = {"merge": spent + result.timings_s.get("merge", 0.0)}
+    timings = {"merge": spent["merge"] + result.timings_s.get("merge", 0.0)}
     timings.update((name, value) for name, value in result.timings_s.items() if name != "merge")
     return replace(
         result, record=record, timings_s=timings,
