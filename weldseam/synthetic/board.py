@@ -19,6 +19,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from weldseam.calibration.board import Board, CharucoBoard, Chessboard, camera_matrix, require_opencv
+from weldseam.io.depth import write_intrinsics
 from weldseam.robot.kinematics import ROBOTS, inverse
 from weldseam.synthetic.sensor import D415, look_at
 from weldseam.types import Intrinsics
@@ -206,7 +207,6 @@ def write_capture_set(directory: str | Path, captures: HandEyeCaptures, *, joint
     pose as a UR pose vector, or, with `joints`, as UR5 joint angles (one inverse kinematics solution of the
     measured flange pose)."""
     cv2 = require_opencv()
-    from weldseam.io.depth import write_intrinsics
     from weldseam.robot.motion import pose_vectors
 
     directory = Path(directory)

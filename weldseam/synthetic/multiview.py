@@ -15,6 +15,7 @@ import numpy as np
 import trimesh
 
 from weldseam.geometry import transform_points, unit
+from weldseam.io.depth import write_intrinsics
 from weldseam.synthetic.scenes import (
     UP,
     SyntheticScan,
@@ -133,7 +134,6 @@ def write_frame_set(folder, scans: list[SyntheticScan], poses: list[np.ndarray])
     from PIL import Image
     from scipy.spatial.transform import Rotation
 
-    from weldseam.io.depth import write_intrinsics
 
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
