@@ -2,6 +2,8 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from weldseam.config import SectionConfig
+from weldseam.geometry import unit
+from weldseam.pipeline.condition import condition_points
 from weldseam.pipeline.section import (
     FILLET,
     V_GROOVE,
@@ -11,6 +13,7 @@ from weldseam.pipeline.section import (
     fit_profile,
     section_params,
 )
+from weldseam.synthetic.scenes import FAMILIES, make_scan
 
 PARAMS = dict(face_radius_m=0.012, groove_min_depth_m=0.0015, fillet_min_leg_m=0.012)
 
@@ -159,3 +162,27 @@ def test_bridging_refuses_what_is_not_a_groove_beside_a_hole(rng):
                          GrooveTemplate(0.007, 0.007), **bridge) is None  # fmt: skip
     u, w, along = grooved_profile(rng, hole=(-0.005, 0.016))
     assert bridge_groove(u, w, np.abs(along), TEMPLATE, **bridge) is None  # all surface behind the plane: past the end
+
+
+def test_a_section_along_a_groove_wall_is_fitted_again_centred_on_the_groove():
+    """A coarse seam line that runs along one groove wall (11.6 mm beside the seam, 4.6 mm down,
+    its torch axis the wall's normal, 26 degrees off) on a rendered D415 scan: sections fitted in
+    that frame alone miss by 0.6 mm on average, a quarter of them by over 1 mm."""
+    rng = np.random.default_rng(0)
+    scene = FAMILIES["v_butt"](rng)
+    scan = make_scan(scene, rng)
+    points = condition_points(scan.points_m, voxel_m=0.001)
+    seam, visible = scene.seams[0], scan.visible[0]
+    truth, truth_axes = seam.points_m[visible][::4], seam.torch_axes[visible][::4]
+    travel = unit(np.gradient(truth, axis=0))
+    truth_axes = unit(truth_axes - np.sum(truth_axes * travel, axis=1, keepdims=True) * travel)
+    for side in (-1, 1):
+        beside = side * np.cross(travel, truth_axes)
+        wall_normal = unit(np.cos(np.radians(26)) * truth_axes + np.sin(np.radians(26)) * beside)
+        fits = analyse_sections(
+            points, cKDTree(points), truth + 0.0116 * beside + 0.0046 * truth_axes, travel, wall_normal,
+            np.cross(travel, wall_normal), section_params(SectionConfig(), voxel_m=0.001),
+        )
+        errors = np.array([np.linalg.norm(f.point_m - p) for f, p in zip(fits, truth) if f.joint == V_GROOVE])
+        assert len(errors) >= 0.95 * len(truth)
+        assert errors.mean() < 0.0004 and np.mean(errors > 0.001) < 0.08

@@ -33,6 +33,10 @@ PARALLEL_QUERY_MIN = 64
 # how far past it a hole must reach.
 BRIDGE_MARGIN_M = 0.0015
 BRIDGE_HOLE_M = 0.004
+# A section fit this far from its centre, or with its torch axis this far from the frame's, is
+# fitted again in its own frame.
+RECENTRE_M = 0.003
+RECENTRE_COS = float(np.cos(np.radians(8.0)))
 
 @dataclass(frozen=True)
 class SectionFit:
@@ -115,7 +119,32 @@ def analyse_sections(
     lateral: np.ndarray,
     params: SectionParams,
 ) -> list[SectionFit]:
-    """Fit every cross-section; `tree` is a cKDTree over the fine `points` (N, 3)."""
+    """Fit every cross-section; `tree` is a cKDTree over the fine `points` (N, 3).
+
+    A fit far from its centre, or with a torch axis far from the frame's (a coarse line that
+    runs along one groove wall), is fitted again in the frame it found: centred on its seam
+    point, across the same travel, with its torch axis. The groove then sits in the middle of
+    the window with its surface level, as the fit assumes."""
+    fits = _fit_sections(points, tree, centres, travel, axes, lateral, params)
+    moved = [
+        k for k, fit in enumerate(fits)
+        if fit.joint
+        and (np.linalg.norm(fit.point_m - centres[k]) > RECENTRE_M or fit.torch_axis @ axes[k] < RECENTRE_COS)
+    ]
+    if moved:
+        again_axes, again_lateral = zip(*(_frame(travel[k], fits[k].torch_axis) for k in moved))
+        again = _fit_sections(
+            points, tree, np.array([fits[k].point_m for k in moved]), travel[moved], np.array(again_axes),
+            np.array(again_lateral), params,
+        )
+        for k, fit in zip(moved, again):
+            if fit.joint == fits[k].joint:
+                fits[k] = fit
+    return fits
+
+
+def _fit_sections(points, tree, centres, travel, axes, lateral, params: SectionParams) -> list[SectionFit]:
+    """One fit per centre, in the frames given."""
     # Threads pay off only for many centres; seam extension asks for one at a time.
     workers = -1 if len(centres) >= PARALLEL_QUERY_MIN else 1
     neighbourhoods = tree.query_ball_point(centres, params.half_width_m, workers=workers, return_sorted=True)
