@@ -126,6 +126,9 @@ class SectionConfig:
     )
     max_gap_m: float = _param(0.012, "a run of failed sections longer than this splits the seam")
     max_extension_m: float = _param(0.3, "how far an open seam end may be extended section by section")
+    max_hole_m: float = _param(
+        0.05, "longest hole in the scan (no data on the seam line) a seam is carried across, interpolated"
+    )
 
 
 @dataclass(frozen=True)

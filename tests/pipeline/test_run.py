@@ -29,6 +29,21 @@ def test_v_groove_path_lies_on_the_groove_centre_and_points_into_the_plate(rng):
     assert set(result.timings_s) == set(STAGES)
 
 
+def test_a_groove_across_a_hole_in_the_scan_is_one_path_and_the_hole_is_reported(rng):
+    points = v_groove_cloud(rng)
+    hole = (points[:, 0] > 0.02) & (points[:, 0] < 0.055)  # 35 mm with no data, across the whole part
+    result = plan(points[~hole], [0.0, 0.05, 0.45])
+    assert len(result.paths) == 1
+    path = result.paths[0]
+    lateral = np.hypot(path.positions_m[:, 1], path.positions_m[:, 2] - 0.010)
+    assert lateral.max() < 0.001 and path.length_m > 0.22
+    (warning,) = result.warnings
+    assert warning.startswith("seam 0: ") and "interpolated across a hole in the scan" in warning
+    length_mm = float(warning.split(": ")[1].split(" mm")[0])
+    middle_x = float(warning.split("around (")[1].split(",")[0])
+    assert 30 <= length_mm <= 45 and abs(middle_x - 0.0375) < 0.005
+
+
 def test_fillet_path_is_the_inside_corner_with_the_bisector_axis(rng):
     result = plan(fillet_cloud(rng), [0.0, 0.3, 0.3])
     assert [p.joint for p in result.paths] == ["fillet"]

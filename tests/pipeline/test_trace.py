@@ -29,9 +29,7 @@ def ring_arc(start_rad, end_rad):
 def test_an_extension_round_a_loop_stops_where_it_meets_the_seam(rng):
     points = ring_groove_plate(rng)
     seam = ring_arc(0.0, 1.5 * np.pi)  # three quarters of the ring traced; the rest is for extension
-    extended = extend_seam(seam, points, cKDTree(points), step_m=STEP_M, max_gap_m=0.012, max_extension_m=0.3,
-                           section_params=SECTION_PARAMS)  # fmt: skip
-    positions = extended.positions_m
+    positions = extended(seam, points)
     radii = np.hypot(positions[:, 0], positions[:, 1])
     assert np.abs(radii - RING_RADIUS_M).max() < 0.0005, "the extension follows the groove"
     circumference = 2 * np.pi * RING_RADIUS_M
@@ -55,9 +53,9 @@ def straight_trace(start_x, end_x, axis):
     return TracedSeam(positions, np.tile(axis, (len(x), 1)), False, "v_groove", 1.0)
 
 
-def extended(seam, points):
+def extended(seam, points, max_hole_m=0.05):
     return extend_seam(seam, points, cKDTree(points), step_m=STEP_M, max_gap_m=0.012, max_extension_m=0.3,
-                       section_params=SECTION_PARAMS).positions_m  # fmt: skip
+                       max_hole_m=max_hole_m, section_params=SECTION_PARAMS).positions_m  # fmt: skip
 
 
 def test_an_extension_follows_a_groove_over_a_block_edge_and_keeps_the_corner(rng):
@@ -101,3 +99,37 @@ def test_an_extension_bridges_a_dropout_over_one_edge_and_stops_at_the_plate_end
     # Sections that straddle the dropout's far boundary fit less well; they stay within 1.5 mm.
     assert np.abs(positions[:, 1:]).max() < 0.0015
     assert -0.007 < positions[:, 0].max() < 0.002, "goes on past the dropout to the plate end, not beyond it"
+
+
+def test_an_extension_crosses_a_hole_in_the_scan_and_goes_on_to_the_plate_end(rng):
+    points = plate_ending_on_a_table(rng)
+    hole = (points[:, 0] > -0.045) & (points[:, 0] < -0.015)  # 30 mm with no data across the whole window
+    seam = straight_trace(-0.075, -0.055, [0.0, 0.0, -1.0])
+    positions = extended(seam, points[~hole])
+    across = positions[(positions[:, 0] > -0.046) & (positions[:, 0] < -0.014)]
+    assert np.diff(np.sort(across[:, 0])).max() < 1.5 * STEP_M, "the hole is filled with poses"
+    assert np.abs(across[:, 1:]).max() < 0.0005, "on the seam line"
+    assert np.abs(positions[:, 1:]).max() < 0.0015  # as in the dropout test: the plate end's sections straddle it
+    assert -0.008 < positions[:, 0].max() < 0.002, "on to the plate end, not beyond it"
+    assert extended(seam, points[~hole], max_hole_m=0.0)[:, 0].max() < -0.04, "max_hole_m = 0: stops at the hole"
+
+
+def test_an_extension_never_crosses_where_the_groove_stops_and_flat_plate_goes_on(rng):
+    """A groove along x interrupted for 20 mm (-0.04 < x < -0.02) by flat plate, then going on:
+    two seams in line, and the weld must not be carried across the flat stretch."""
+    x, y = grid((-0.08, 0.02), (-0.03, 0.03))
+    groove = (x < -0.04) | (x > -0.02)
+    points = np.column_stack([x, y, -v_depth(y) * groove]) + rng.normal(0, 0.0001, (len(x), 3))
+    positions = extended(straight_trace(-0.075, -0.055, [0.0, 0.0, -1.0]), points)
+    assert positions[:, 0].max() < -0.036
+
+
+def test_an_extension_crosses_a_hole_on_a_curved_seam_along_the_curve(rng):
+    points = ring_groove_plate(rng)
+    angle = np.arctan2(points[:, 1], points[:, 0]) % (2 * np.pi)
+    hole = (angle > 1.65 * np.pi) & (angle < 1.65 * np.pi + 0.035 / RING_RADIUS_M)  # 35 mm of the ring
+    positions = extended(ring_arc(0.0, 1.5 * np.pi), points[~hole])
+    radii = np.hypot(positions[:, 0], positions[:, 1])
+    assert np.abs(radii - RING_RADIUS_M).max() < 0.0005, "the hole is bridged along the ring, not across it"
+    assert polyline_length(positions) > 0.95 * 2 * np.pi * RING_RADIUS_M
+    assert np.linalg.norm(positions[0] - positions[-1]) <= 3 * STEP_M

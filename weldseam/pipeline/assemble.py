@@ -8,12 +8,14 @@ joined again, and split at T/Y junctions into one seam per branch.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from scipy.spatial import cKDTree
 
 from weldseam.geometry import bend_corner, polyline_length, unit
 from weldseam.pipeline.section import FILLET, SectionParams
-from weldseam.pipeline.trace import END_BASELINE_M, TracedSeam, end_direction, extend_seam, seam_length
+from weldseam.pipeline.trace import END_BASELINE_M, Hole, TracedSeam, end_direction, extend_seam, seam_length
 
 
 def assemble_seams(
@@ -31,6 +33,7 @@ def assemble_seams(
     step_m: float,
     max_gap_m: float,
     max_extension_m: float,
+    max_hole_m: float,
     section_params: SectionParams,
 ) -> list[TracedSeam]:
     """The final seams from every chain's traces: fillets on the support plane dropped,
@@ -42,17 +45,37 @@ def assemble_seams(
         return trim_overlaps(joined, tolerance_m=overlap_m)
 
     seams = trimmed_and_joined(off_support(traced, support, support_tolerance_m))
-    seams = trimmed_and_joined([
+    extended = [
         extend_seam(
             seam, points, tree, step_m=step_m, max_gap_m=max_gap_m, max_extension_m=max_extension_m,
-            section_params=section_params,
+            max_hole_m=max_hole_m, section_params=section_params,
         )
         for seam in seams
-    ])
+    ]
+    seams = trimmed_and_joined(extended)
     # Fragments that joined nothing are noise; they must not split real seams either.
     seams = [seam for seam in seams if seam_length(seam) >= min_branch_m]
     seams = split_at_junctions(seams, tolerance_m=join_m / 2)
-    return [seam for seam in seams if seam_length(seam) >= min_seam_length_m]
+    holes = [hole for seam in extended for hole in seam.holes]
+    return [_with_holes(seam, holes, step_m) for seam in seams if seam_length(seam) >= min_seam_length_m]
+
+
+def _with_holes(seam: TracedSeam, holes: list[Hole], step_m: float) -> TracedSeam:
+    """The seam with the holes (crossed by any extension) whose middle lies on it, within a step
+    of one of its points. Pieces of one seam often cross the same hole: longest first, a hole whose
+    middle lies within half a kept one's length of that one's middle is the same hole."""
+    if not holes:
+        return seam
+    seam_tree = cKDTree(seam.positions_m)
+    kept: list[Hole] = []
+    for hole in sorted(holes, key=lambda h: (-h.length_m, h.middle_m)):
+        middle = np.array(hole.middle_m)
+        if seam_tree.query(middle)[0] > step_m:
+            continue
+        if all(np.linalg.norm(middle - np.array(other.middle_m)) > other.length_m / 2 for other in kept):
+            kept.append(hole)
+    return replace(seam, holes=tuple(kept))
+
 
 def off_support(seams: list[TracedSeam], support, tolerance_m: float) -> list[TracedSeam]:
     """The seams that are not fillets on the support plane (`support` = (point, normal) or

@@ -210,7 +210,8 @@ def plan_paths(
             overlap_m=c.order.overlap_m, join_m=c.order.join_m, max_turn_deg=c.order.max_join_turn_deg,
             min_branch_m=c.order.min_branch_m, min_seam_length_m=c.segment.min_seam_length_m,
             step_m=c.resample.spacing_m, max_gap_m=c.section.max_gap_m,
-            max_extension_m=c.section.max_extension_m, section_params=params,
+            max_extension_m=c.section.max_extension_m, max_hole_m=c.section.max_hole_m,
+            section_params=params,
         )
     paths = []
     with stage("resample"):
@@ -219,6 +220,12 @@ def plan_paths(
                 seam.positions_m, seam.torch_axes, spacing_m=c.resample.spacing_m,
                 smoothing_m=c.resample.smoothing_m, closed=seam.closed,
             )
+            warnings += [
+                f"seam {len(paths)}: {hole.length_m * 1000:.0f} mm interpolated across a hole in the scan "
+                f"(no data on the seam) around ({hole.middle_m[0]:.3f}, {hole.middle_m[1]:.3f}, "
+                f"{hole.middle_m[2]:.3f}) m"
+                for hole in seam.holes
+            ]
             paths.append(
                 WeldPath(
                     seam_id=len(paths), positions_m=positions, rotations=rotations,

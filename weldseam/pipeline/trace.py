@@ -33,19 +33,36 @@ END_BASELINE_M = 0.012
 # A turn over an edge counts once the seam goes on this far along the new face.
 TURN_CONFIRM_M = 0.024
 TANGENT_BASELINE_M = 0.032
+# The tightest bend an extension predicts (the curvature of a noisy end is clamped to it).
+MIN_BEND_RADIUS_M = 0.03
 # The groove template a bridged section assumes: the median of this many latest fits.
 TEMPLATE_MEMORY = 6
+# Crossing a hole in the scan: the seam must fit this many times in a row beyond it, and the
+# seam line across it hold no more than HOLE_STRAYS points within HOLE_RADIUS_M (_across_hole).
+HOLE_CONFIRM = 2
+HOLE_RADIUS_M = 0.0015
+HOLE_STRAYS = 2
+
+
+@dataclass(frozen=True)
+class Hole:
+    """A stretch of seam interpolated across a hole in the scan: its middle (3,) and length (m)."""
+
+    middle_m: tuple[float, float, float]
+    length_m: float
 
 
 @dataclass(frozen=True)
 class TracedSeam:
-    """Seam points (K, 3) and torch axes (K, 3) in travel order."""
+    """Seam points (K, 3) and torch axes (K, 3) in travel order, and the holes in the scan
+    the seam was interpolated across (extend_seam)."""
 
     positions_m: np.ndarray
     torch_axes: np.ndarray
     closed: bool
     joint: str
     confidence: float
+    holes: tuple[Hole, ...] = ()
 
 
 def trace_chain(
@@ -136,25 +153,36 @@ def end_direction(points: np.ndarray, at_start: bool) -> np.ndarray:
     return unit(direction if direction @ chord >= 0 else -direction)
 
 
-def end_tangent(points: np.ndarray) -> np.ndarray:
-    """Unit tangent at the last of `points` (in travel order), pointing on: the derivative at the
-    end of a quadratic p(s) = a + b s + c s^2 fitted over the last TANGENT_BASELINE_M of arc.
-    A chord or principal direction over that stretch of a curve of radius R leans back by
-    baseline / 2R (0.1 rad over 12 mm at R = 60 mm), which is 0.2 mm sideways per 2 mm step."""
+def end_curve(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unit tangent t and curvature vector k (1/m, perpendicular to t) at the last of `points`
+    (in travel order), from a quadratic p(s) = a + b s + c s^2 fitted over the last
+    TANGENT_BASELINE_M of arc: t = -b/|b|, k = 2c without its component along t, at most
+    1/MIN_BEND_RADIUS_M. The seam ahead is predicted as p + d t + d^2 k / 2 (_ahead). A chord
+    or principal direction over that stretch of a curve of radius R leans back by baseline / 2R
+    (0.1 rad over 12 mm at R = 60 mm), which is 0.2 mm sideways per 2 mm step."""
     ordered = points[::-1]
     arc = arc_lengths(ordered)
     window = ordered[arc <= TANGENT_BASELINE_M]
     if len(window) < 5:
-        return end_direction(points, at_start=False)
+        return end_direction(points, at_start=False), np.zeros(3)
     s = arc[: len(window)]
     design = np.column_stack([np.ones_like(s), s, s * s])
     coefficients = np.linalg.lstsq(design, window, rcond=None)[0]
-    return unit(-coefficients[1])
+    tangent = unit(-coefficients[1])
+    bend = 2 * coefficients[2]
+    bend -= (bend @ tangent) * tangent
+    size = np.linalg.norm(bend)
+    return tangent, bend * min(1.0, 1.0 / (MIN_BEND_RADIUS_M * size)) if size > 0 else bend
+
+
+def _ahead(last_point, direction, bend, distance_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """The predicted seam point `distance_m` on along the curve (end_curve) and its travel."""
+    return last_point + distance_m * direction + 0.5 * distance_m**2 * bend, unit(direction + distance_m * bend)
 
 
 def extend_seam(
     seam: TracedSeam, points, tree, *, step_m: float, max_gap_m: float, max_extension_m: float,
-    section_params: SectionParams,
+    max_hole_m: float, section_params: SectionParams,
 ) -> TracedSeam:
     """The seam with sections added beyond both open ends while they fit its joint near
     the predicted place, so the path reaches the seam's real ends.
@@ -168,7 +196,9 @@ def extend_seam(
     straddles the part's end face does). Where the straight line finds nothing, the seam may
     turn 90 degrees over an edge (a groove running over a block's edge, or up a wall): the
     turned prediction is tried within max_gap_m of the end, and a run of fits there at least
-    TURN_CONFIRM_M long continues the seam on the new face. An extension stops where it comes
+    TURN_CONFIRM_M long continues the seam on the new face. Where neither finds the seam, it
+    may cross a hole in the scan up to `max_hole_m` long (_across_hole); the hole is filled with
+    interpolated (bridged) points. An extension stops where it comes
     within two steps of the seam itself (it has gone round a loop; the ends then meet and the
     seam closes). Run on joined seams only: extending every partial trace would walk the same
     seam once per piece.
@@ -176,6 +206,7 @@ def extend_seam(
     if seam.closed or len(seam.positions_m) < 2:
         return seam
     positions, axes = list(seam.positions_m), list(seam.torch_axes)
+    holes = list(seam.holes)
     search = dict(points=points, tree=tree, joint=seam.joint, step_m=step_m, max_gap_m=max_gap_m,
                   section_params=section_params)  # fmt: skip
     for at_start in (True, False):
@@ -187,22 +218,32 @@ def extend_seam(
         elsewhere = np.array(positions)[arc < arc[-1] - 2 * END_BASELINE_M]
         elsewhere_tree = cKDTree(elsewhere) if len(elsewhere) else None
         face_start = 0  # where the seam's current face begins (after a turn over an edge)
-        direction = end_tangent(np.array(positions))
+        direction, bend = end_curve(np.array(positions))
         bridged = [False] * len(positions)
         templates = _end_templates(np.array(positions), np.array(axes), points, tree, seam.joint, section_params)
         for _ in range(int(max_extension_m / step_m)):
-            fit = _straight_fit(positions[-1], axes[-1], direction, template=_median_template(templates), **search)
+            # Past bridged points the seam is predicted along the curve from the last fitted one;
+            # right after a fit, straight (a fit per 2 mm step re-aims it; the curvature of a
+            # noisy end is not worth following).
+            since = _arc_since_fit(positions, bridged)
+            heading, ahead_bend = unit(direction + since * bend), (bend if since > 0 else np.zeros(3))
+            fit = _next_fit(positions[-1], axes[-1], heading, ahead_bend, template=_median_template(templates),
+                            **search)  # fmt: skip
             fits = [fit]
             if fit is None:
-                turned = _turned_run(positions[-1], axes[-1], direction, **search)
-                if turned is None:
-                    break
-                fits, travel = turned
-                corner = bend_corner(positions[-1], direction, fits[0].point_m, -travel, max_gap_m + 3 * step_m)
-                if corner is not None:  # the sections at the edge itself fail: put the real corner in
-                    fits.insert(0, SectionFit(seam.joint, corner, unit(axes[-1] + fits[0].torch_axis)))
-                direction = travel
-                face_start = len(positions) + (corner is not None)
+                turned = _turned_run(positions[-1], axes[-1], heading, **search)
+                if turned is not None:
+                    fits, travel = turned
+                    corner = bend_corner(positions[-1], heading, fits[0].point_m, -travel, max_gap_m + 3 * step_m)
+                    if corner is not None:  # the sections at the edge itself fail: put the real corner in
+                        fits.insert(0, SectionFit(seam.joint, corner, unit(axes[-1] + fits[0].torch_axis)))
+                    direction, bend = travel, np.zeros(3)
+                    face_start = len(positions) + (corner is not None)
+                else:
+                    fits = _across_hole(positions[-1], axes[-1], heading, bend, max_hole_m=max_hole_m, **search)
+                    if fits is None:
+                        break
+                    holes.append(_hole(positions[-1], fits))
             if elsewhere_tree is not None and elsewhere_tree.query([f.point_m for f in fits])[0].min() <= 2 * step_m:
                 break
             positions += [f.point_m for f in fits]
@@ -215,11 +256,25 @@ def extend_seam(
             # only: a bridged point leans on one edge, and aiming by it would turn a small offset into a drift.
             fitted = np.array(positions[face_start:])[~np.array(bridged[face_start:])]
             if len(fitted) >= 3:
-                direction = end_tangent(fitted)
+                direction, bend = end_curve(fitted)
         if at_start:
             positions.reverse()
             axes.reverse()
-    return TracedSeam(np.array(positions), np.array(axes), False, seam.joint, seam.confidence)
+    return TracedSeam(np.array(positions), np.array(axes), False, seam.joint, seam.confidence, tuple(holes))
+
+
+def _hole(start: np.ndarray, fits: list[SectionFit]) -> Hole:
+    """The Hole bridged from `start` by the bridged points at the head of `fits`."""
+    line = np.array([start, *(f.point_m for f in fits if f.bridged), next(f.point_m for f in fits if not f.bridged)])
+    middle = line[len(line) // 2]
+    return Hole(tuple(round(float(v), 6) for v in middle), polyline_length(line))
+
+
+def _arc_since_fit(positions: list[np.ndarray], bridged: list[bool]) -> float:
+    """Arc length (m) from the last fitted (not bridged) point to the last point."""
+    fitted = np.flatnonzero(~np.array(bridged))
+    first = fitted[-1] if len(fitted) else 0
+    return float(polyline_length(np.array(positions[first:]))) if first < len(positions) - 1 else 0.0
 
 
 def _section_at(points, tree, predicted, travel, axis, section_params, template=None):
@@ -255,20 +310,68 @@ def _median_template(templates: list[GrooveTemplate | None]) -> GrooveTemplate |
     return GrooveTemplate(*sides) if sides != [None, None] else None
 
 
-def _straight_fit(
-    last_point, last_axis, direction, *, points, tree, joint, step_m, max_gap_m, section_params, template=None
+def _next_fit(
+    last_point, last_axis, direction, bend, *, points, tree, joint, step_m, max_gap_m, section_params, template=None
 ):
-    """The next fit along the straight line from the end (stepping over failed sections), or None.
-    Where a section fails and the groove's template is known, it is bridged (a dropout over
-    part of the groove)."""
+    """The next fit along the predicted curve from the end (_ahead; stepping over failed sections),
+    or None. Where a section fails and the groove's template is known, it is bridged (a dropout
+    over part of the groove)."""
     distance = step_m
     while distance <= max_gap_m:
-        predicted = last_point + distance * direction
-        fit, depth, sideways = _section_at(points, tree, predicted, direction, last_axis, section_params, template)
+        predicted, travel = _ahead(last_point, direction, bend, distance)
+        fit, depth, sideways = _section_at(points, tree, predicted, travel, last_axis, section_params, template)
         if fit.joint == joint and sideways <= max(1.5 * step_m, 0.15 * distance) and depth <= 0.5 * step_m:
             return fit
         distance += step_m
     return None
+
+
+def _across_hole(
+    last_point, last_axis, direction, bend, *, points, tree, joint, step_m, max_gap_m, max_hole_m, section_params
+) -> list[SectionFit] | None:
+    """Bridged points across a hole in the scan followed by the first HOLE_CONFIRM fits beyond
+    it, or None.
+
+    Sections are tried along the predicted curve (_ahead) from max_gap_m to max_hole_m ahead;
+    the first that fits the joint within 15 % of its distance sideways and 5 % in depth must be
+    followed by HOLE_CONFIRM - 1 more fits in a row. The hole is bridged by a cubic Hermite
+    curve between the two ends and their travel directions (torch axes interpolated), and that
+    curve must be empty: no more than HOLE_STRAYS scan points within HOLE_RADIUS_M of it. For a
+    groove the seam point is the centre of the opening, in the air over the groove; where a
+    plate's surface crosses the line, the groove has ended, and one ahead is another seam."""
+    for distance in np.arange(max_gap_m + step_m, max_hole_m + step_m / 2, step_m):
+        predicted, travel = _ahead(last_point, direction, bend, distance)
+        fit, depth, sideways = _section_at(points, tree, predicted, travel, last_axis, section_params)
+        if fit.joint != joint or sideways > 0.25 * distance or depth > max(0.5 * step_m, 0.05 * distance):
+            continue
+        run = [fit]
+        while len(run) < HOLE_CONFIRM:
+            following = _next_fit(run[-1].point_m, run[-1].torch_axis, travel, bend, points=points, tree=tree,
+                                  joint=joint, step_m=step_m, max_gap_m=max_gap_m,
+                                  section_params=section_params)  # fmt: skip
+            if following is None:
+                return None
+            run.append(following)
+        arrival = unit(run[-1].point_m - run[0].point_m)
+        line = _hermite(last_point, direction, fit.point_m, arrival, HOLE_RADIUS_M)
+        if tree.query_ball_point(line, HOLE_RADIUS_M, return_length=True).sum() > HOLE_STRAYS:
+            return None
+        bridge = _hermite(last_point, direction, fit.point_m, arrival, step_m)
+        weights = np.linspace(0.0, 1.0, len(bridge) + 2)[1:-1, None]
+        tilts = unit((1 - weights) * last_axis + weights * fit.torch_axis)
+        return [SectionFit(joint, p, a, fit.half_opening_m, bridged=True) for p, a in zip(bridge, tilts)] + run
+    return None
+
+
+def _hermite(start, start_direction, end, end_direction, spacing_m: float) -> np.ndarray:
+    """Points (K, 3) about `spacing_m` apart strictly between `start` and `end` on the cubic
+    Hermite curve leaving `start` along `start_direction` and arriving along `end_direction`
+    (tangent lengths = the chord)."""
+    chord = np.linalg.norm(end - start)
+    count = max(1, int(round(chord / spacing_m)))
+    s = (np.arange(1, count) / count)[:, None]
+    return ((2 * s**3 - 3 * s**2 + 1) * start + (s**3 - 2 * s**2 + s) * chord * start_direction
+            + (3 * s**2 - 2 * s**3) * end + (s**3 - s**2) * chord * end_direction)  # fmt: skip
 
 
 def _turned_run(last_point, last_axis, direction, *, points, tree, joint, step_m, max_gap_m, section_params):
@@ -293,9 +396,9 @@ def _turned_run(last_point, last_axis, direction, *, points, tree, joint, step_m
                 continue
             run = [fit]
             while np.linalg.norm(run[-1].point_m - run[0].point_m) < TURN_CONFIRM_M:
-                following = _straight_fit(run[-1].point_m, run[-1].torch_axis, travel, points=points, tree=tree,
-                                          joint=joint, step_m=step_m, max_gap_m=max_gap_m,
-                                          section_params=section_params)  # fmt: skip
+                following = _next_fit(run[-1].point_m, run[-1].torch_axis, travel, np.zeros(3), points=points,
+                                      tree=tree, joint=joint, step_m=step_m, max_gap_m=max_gap_m,
+                                      section_params=section_params)  # fmt: skip
                 if following is None:
                     break
                 run.append(following)
