@@ -51,6 +51,20 @@ def test_groove_with_one_hidden_wall_is_still_centred(rng):
     assert fit.joint == V_GROOVE and abs(fit.u) < 0.0006
 
 
+def test_a_groove_in_depth_quantised_in_1_mm_steps_is_found(rng):
+    """Seen square on, a D415's 1 mm depth steps put ~90 % of the flat surface on one level: the
+    median deviation is 0, and the next level down must not pass for a depression."""
+    errors = []
+    for _ in range(40):
+        u, w = profile(v_groove(0.002, depth=0.006), rng)
+        fit = fit_profile(u, np.round((w - 0.0001) / 0.001) * 0.001 + 0.0001, **PARAMS)
+        assert fit is not None and fit.joint == V_GROOVE
+        errors.append(fit.u - 0.002)
+    # A single line of points across 1 mm steps places the edges coarsely (one section in ten is
+    # off by 1.5-3 mm); along a seam the sections average out.
+    assert abs(np.mean(errors)) < 0.0003 and np.median(np.abs(errors)) < 0.0005
+
+
 def test_fillet_corner_and_bisector(rng):
     u, w = profile(lambda u: np.abs(u - 0.002), rng)  # 90-degree corner at u = 2 mm
     fit = fit_profile(u, w, **PARAMS)

@@ -33,6 +33,11 @@ PARALLEL_QUERY_MIN = 64
 # how far past it a hole must reach.
 BRIDGE_MARGIN_M = 0.0015
 BRIDGE_HOLE_M = 0.004
+# The least noise a plate surface is taken to have: depth quantised in 1 mm steps (RealSense
+# and most structured-light cameras), seen square on, leaves most of a flat surface on one level
+# and the next 1 mm below; the median deviation is then ~0 and that level would pass for a
+# depression. 1 mm / sqrt(12) = 0.29 mm.
+SURFACE_NOISE_FLOOR_M = 0.0003
 # A section fit this far from its centre, or with its torch axis this far from the frame's, is
 # fitted again in its own frame.
 RECENTRE_M = 0.003
@@ -273,7 +278,7 @@ def _fit_groove(u: np.ndarray, w: np.ndarray, face_radius_m: float, min_depth_m:
     for _ in range(6):
         intercept, slope = _line(u[on_surface], w[on_surface])
         residual = w - (intercept + slope * u)
-        sigma = _noise(residual[on_surface])
+        sigma = max(_noise(residual[on_surface]), SURFACE_NOISE_FLOOR_M)
         depth_limit = max(3 * sigma, 0.4 * min_depth_m)
         updated = (residual > -depth_limit) & (residual < 4 * sigma + depth_limit)
         if updated.sum() < 6 or np.array_equal(updated, on_surface):
