@@ -11,6 +11,7 @@ from weldseam.pipeline.section import (
     analyse_sections,
     bridge_groove,
     fit_profile,
+    fit_section,
     section_params,
 )
 from weldseam.synthetic.scenes import FAMILIES, make_scan
@@ -200,3 +201,26 @@ def test_a_section_along_a_groove_wall_is_fitted_again_centred_on_the_groove():
         errors = np.array([np.linalg.norm(f.point_m - p) for f, p in zip(fits, truth) if f.joint == V_GROOVE])
         assert len(errors) >= 0.95 * len(truth)
         assert errors.mean() < 0.0004 and np.mean(errors > 0.001) < 0.08
+
+
+def plate_edge_beside_groove(rng, edge_y=-0.012, pitch=0.0005):
+    """A plate (top z = 0) with a V-groove along x at y = 0 (opening 8 mm, 6 mm deep) whose edge
+    runs along y = edge_y; beyond it the table, 10 mm down."""
+    x, y = np.meshgrid(np.arange(-0.01, 0.01, 0.001), np.arange(-0.03, 0.03, pitch))
+    x, y = x.ravel(), y.ravel()
+    z = np.where(y < edge_y, -0.010, v_groove(0.0, half_open=0.004, depth=0.006)(y))
+    return np.column_stack([x, y, z + rng.normal(0, 0.0002, len(x))])
+
+
+def test_a_table_beside_the_groove_is_cut_off_when_the_groove_is_known(rng):
+    """Where a plate edge crosses the section close beside the groove (the oblique end of a Y
+    branch), the table beyond it spoils the full section's surface line; knowing the groove's
+    opening from the sections before, the section is fitted again within opening + 6 mm."""
+    points = plate_edge_beside_groove(rng)
+    tree, params = cKDTree(points), section_params(SectionConfig(), voxel_m=0.001)
+    travel, axis = np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.0, -1.0])
+    assert fit_section(points, tree, np.zeros(3), travel, axis, params).joint == ""
+    known = GrooveTemplate(left_m=None, right_m=None, half_opening_m=0.004)
+    fit = fit_section(points, tree, np.zeros(3), travel, axis, params, known)
+    assert fit.joint == V_GROOVE and not fit.bridged
+    assert np.abs(fit.point_m).max() < 0.0003

@@ -58,12 +58,17 @@ class SectionFit:
 
 @dataclass(frozen=True)
 class GrooveTemplate:
-    """Where the plate surface ends beside a groove, as _surface_ends finds it: distances (m)
-    from the seam point to the last surface point on the left (-lateral) and right sides
-    (None: not seen)."""
+    """What the sections before know of a groove: where the plate surface ends beside it, as
+    _surface_ends finds it (distances (m) from the seam point to the last surface point on the
+    left (-lateral) and right sides; None: not seen), and half the width of its opening (m)."""
 
     left_m: float | None
     right_m: float | None
+    half_opening_m: float | None = None
+
+    @property
+    def edges_seen(self) -> bool:
+        return self.left_m is not None or self.right_m is not None
 
     def expected(self, side: int) -> float | None:
         """The distance on `side` (-1 left, +1 right); a side not seen mirrors the other."""
@@ -168,33 +173,44 @@ def fit_section(
     points: np.ndarray, tree, centre: np.ndarray, travel: np.ndarray, axis: np.ndarray, params: SectionParams,
     template: GrooveTemplate | None = None,
 ) -> SectionFit:
-    """The one section at `centre` (3,) across `travel`, `axis` made perpendicular to it. Where
-    no groove fits and the surface ends beside the groove are known from the sections before
-    (`template`), the section is bridged over a sensor dropout (see bridge_groove) from the
-    same profile."""
+    """The one section at `centre` (3,) across `travel`, `axis` made perpendicular to it.
+
+    Where no groove fits and the sections before describe the groove (`template`), the section
+    is fitted again within half the groove's opening + face_radius / 2 of the centre (where a
+    plate edge crosses the section obliquely, the table beyond it sits beside the groove and
+    spoils the surface line); failing that, where the surface ends beside the groove are known,
+    it is bridged over a sensor dropout (see bridge_groove) from the same profile."""
     axis, lateral = _frame(travel, axis)
     u, w, along = _profile_at(points, tree, centre, travel, axis, lateral, params)
     profile = fit_profile(
         u, w, face_radius_m=params.face_radius_m, groove_min_depth_m=params.groove_min_depth_m,
         fillet_min_leg_m=params.fillet_min_leg_m,
     )
-    if template is not None and (profile is None or profile.joint != V_GROOVE):
-        bridged = bridge_groove(
-            u, w, along, template, face_radius_m=params.face_radius_m, groove_min_depth_m=params.groove_min_depth_m
+    if template is None or (profile is not None and profile.joint == V_GROOVE):
+        return _to_3d(profile, centre, axis, lateral)
+    if template.half_opening_m is not None:
+        near = np.abs(u) <= template.half_opening_m + params.face_radius_m / 2
+        profile = fit_profile(
+            u[near], w[near], face_radius_m=params.face_radius_m, groove_min_depth_m=params.groove_min_depth_m,
+            fillet_min_leg_m=params.fillet_min_leg_m,
         )
-        return replace(_to_3d(bridged, centre, axis, lateral), bridged=True)
-    return _to_3d(profile, centre, axis, lateral)
+        if profile is not None and profile.joint == V_GROOVE:
+            return _to_3d(profile, centre, axis, lateral)
+    if not template.edges_seen:
+        return _to_3d(None, centre, axis, lateral)
+    bridged = bridge_groove(
+        u, w, along, template, face_radius_m=params.face_radius_m, groove_min_depth_m=params.groove_min_depth_m
+    )
+    return replace(_to_3d(bridged, centre, axis, lateral), bridged=True)
 
 
 def groove_template(points: np.ndarray, tree, fit: SectionFit, travel: np.ndarray, params: SectionParams):
-    """Where the plate surface ends beside a fitted groove section (a GrooveTemplate), measured
-    as a bridged section measures it, or None when neither end is seen."""
+    """The GrooveTemplate of a fitted groove section: its half-opening, and where the plate
+    surface ends beside it, measured as a bridged section measures it."""
     u, w, _ = _profile_at(points, tree, fit.point_m, travel, *_frame(travel, fit.torch_axis), params)
     found = _surface_ends(u, w, fit.half_opening_m, fit.half_opening_m, params.groove_min_depth_m)
-    if found is None or not found[1]:
-        return None
-    ends = found[1]
-    return GrooveTemplate(-ends[-1] if -1 in ends else None, ends[1] if 1 in ends else None)
+    ends = found[1] if found is not None else {}
+    return GrooveTemplate(-ends[-1] if -1 in ends else None, ends[1] if 1 in ends else None, fit.half_opening_m)
 
 
 def _frame(travel: np.ndarray, axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
