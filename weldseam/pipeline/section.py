@@ -131,14 +131,15 @@ def analyse_sections(
 ) -> list[SectionFit]:
     """Fit every cross-section; `tree` is a cKDTree over the fine `points` (N, 3).
 
-    A fit far from its centre, or with a torch axis far from the frame's (a coarse line that
-    runs along one groove wall), is fitted again in the frame it found: centred on its seam
+    A groove fit far from its centre, or with a torch axis far from the frame's (a coarse line
+    that runs along one groove wall), is fitted again in the frame it found: centred on its seam
     point, across the same travel, with its torch axis. The groove then sits in the middle of
-    the window with its surface level, as the fit assumes."""
+    the window with its surface level, as the fit assumes. (A fillet's corner, where two
+    fitted lines meet, does not depend on where the window sits.)"""
     fits = _fit_sections(points, tree, centres, travel, axes, lateral, params)
     moved = [
         k for k, fit in enumerate(fits)
-        if fit.joint
+        if fit.joint == V_GROOVE
         and (np.linalg.norm(fit.point_m - centres[k]) > RECENTRE_M or fit.torch_axis @ axes[k] < RECENTRE_COS)
     ]
     if moved:
@@ -155,9 +156,11 @@ def analyse_sections(
 
 def _fit_sections(points, tree, centres, travel, axes, lateral, params: SectionParams) -> list[SectionFit]:
     """One fit per centre, in the frames given."""
-    # Threads pay off only for many centres; seam extension asks for one at a time.
+    # Threads pay off only for many centres; seam extension asks for one at a time. Neighbours
+    # come in the tree's traversal order, the same for the same cloud (sorting them costs a third
+    # of the query).
     workers = -1 if len(centres) >= PARALLEL_QUERY_MIN else 1
-    neighbourhoods = tree.query_ball_point(centres, params.half_width_m, workers=workers, return_sorted=True)
+    neighbourhoods = tree.query_ball_point(centres, params.half_width_m, workers=workers, return_sorted=False)
     fits = []
     for centre, t, a, lat, members in zip(centres, travel, axes, lateral, neighbourhoods):
         u, w, _ = _profile(points[members] - centre, t, a, lat, params)
@@ -221,7 +224,7 @@ def _frame(travel: np.ndarray, axis: np.ndarray) -> tuple[np.ndarray, np.ndarray
 
 def _profile_at(points, tree, centre, travel, axis, lateral, params: SectionParams):
     """_profile of the one section at `centre`."""
-    members = tree.query_ball_point(centre, params.half_width_m, return_sorted=True)
+    members = tree.query_ball_point(centre, params.half_width_m, return_sorted=False)
     return _profile(points[members] - centre, travel, axis, lateral, params)
 
 
@@ -267,7 +270,7 @@ def fit_profile(
 def _line(u: np.ndarray, w: np.ndarray) -> tuple[float, float]:
     """Least-squares line w = intercept + slope * u, in closed form (called thousands of
     times per scan on a few hundred points, where lstsq's overhead dominates)."""
-    mean_u, mean_w = u.mean(), w.mean()
+    mean_u, mean_w = u.sum() / len(u), w.sum() / len(w)
     du = u - mean_u
     spread = float(du @ du)
     slope = float(du @ (w - mean_w)) / spread if spread > 0 else 0.0
@@ -278,6 +281,16 @@ def _median(values: np.ndarray) -> float:
     """Upper median by partition (np.median's overhead dominates on a few hundred values)."""
     middle = len(values) // 2
     return float(np.partition(values, middle)[middle])
+
+
+def _upper_decile(values: np.ndarray) -> float:
+    """The 90th percentile, interpolated as np.percentile does, by partition (np.percentile's
+    overhead dominates on a few dozen values)."""
+    position = 0.9 * (len(values) - 1)
+    low = int(position)
+    high = min(low + 1, len(values) - 1)
+    ordered = np.partition(values, (low, high))
+    return float(ordered[low] + (position - low) * (ordered[high] - ordered[low]))
 
 
 def _noise(residuals: np.ndarray) -> float:
@@ -312,7 +325,7 @@ def _fit_groove(u: np.ndarray, w: np.ndarray, face_radius_m: float, min_depth_m:
     right_surface = on_surface & (u > u_end)
     if left_surface.sum() < 4 or right_surface.sum() < 4:
         return None
-    if np.percentile(depth[groove], 90) < min_depth_m:
+    if _upper_decile(depth[groove]) < min_depth_m:
         return None
     edges = _groove_edges(u, depth, groove, u[left_surface].max(), u[right_surface].min())
     if edges is None:
@@ -417,7 +430,7 @@ def _groove_edges(u, depth, groove, left_surface_end, right_surface_end) -> tupl
     The last surface point is not used for a visible wall: its shallowest points pass for
     surface, so that point lies ~1 mm inside the edge, and the bias differs side to side.
     """
-    deepest = np.percentile(depth[groove], 90)
+    deepest = _upper_decile(depth[groove])
     bottom = _median(u[groove][depth[groove] >= 0.8 * deepest])
     # Wall points are chosen by position across the groove, never by depth: choosing by the
     # fitted variable would bias the line where the noise differs between the walls.
