@@ -53,8 +53,9 @@ def assemble_seams(
         for seam in seams
     ]
     seams = trimmed_and_joined(extended)
-    # Fragments that joined nothing are noise; they must not split real seams either.
-    seams = [seam for seam in seams if seam_length(seam) >= min_branch_m]
+    # Fragments that joined nothing are noise, and a piece too short to be a seam is no branch:
+    # neither may split a real seam (it would be dropped after splitting it).
+    seams = [seam for seam in seams if seam_length(seam) >= max(min_branch_m, min_seam_length_m)]
     seams = split_at_junctions(seams, tolerance_m=join_m / 2)
     holes = [hole for seam in extended for hole in seam.holes]
     return [_with_holes(seam, holes, step_m) for seam in seams if seam_length(seam) >= min_seam_length_m]
