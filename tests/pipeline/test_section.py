@@ -12,6 +12,7 @@ from weldseam.pipeline.section import (
     bridge_groove,
     fit_profile,
     fit_section,
+    groove_template,
     section_params,
 )
 from weldseam.synthetic.scenes import FAMILIES, make_scan
@@ -224,3 +225,20 @@ def test_a_table_beside_the_groove_is_cut_off_when_the_groove_is_known(rng):
     fit = fit_section(points, tree, np.zeros(3), travel, axis, params, known)
     assert fit.joint == V_GROOVE and not fit.bridged
     assert np.abs(fit.point_m).max() < 0.0003
+
+
+def test_the_template_finds_both_surface_ends_of_a_noisy_groove(rng):
+    """With 0.4 mm noise the surface band (3 sigma) takes in the top of each wall, a millimetre or
+    so inside the edge; that is still a groove, and the surface ends it leaves are measured."""
+    x, y = np.meshgrid(np.arange(-0.01, 0.01, 0.001), np.arange(-0.03, 0.03, 0.0006))
+    z = v_groove(0.0, half_open=0.006, depth=0.006)(y.ravel())
+    points = np.column_stack([x.ravel(), y.ravel(), z + rng.normal(0, 0.0004, x.size)])
+    tree, params = cKDTree(points), section_params(SectionConfig(), voxel_m=0.001)
+    travel = np.array([1.0, 0.0, 0.0])
+    measured = []
+    for centre_x in np.arange(-0.004, 0.0045, 0.002):
+        fit = fit_section(points, tree, np.array([centre_x, 0.0, 0.0]), travel, np.array([0.0, 0.0, -1.0]), params)
+        template = groove_template(points, tree, fit, travel, params)
+        measured += [template.left_m, template.right_m]
+    assert None not in measured
+    assert np.all(np.abs(np.array(measured) - 0.006) < 0.0025)

@@ -394,8 +394,9 @@ def _surface_ends(u, w, left_m: float, right_m: float, groove_min_depth_m: float
     surface is a line fitted to the points beyond that span, its points within
     max(3 sigma, 0.4 groove_min_depth) of it; the end on a side (-1 left, +1 right) is the
     innermost surface point there, kept when it lies within BRIDGE_MARGIN_M of the expected
-    end with at least 4 surface points beyond it. None when the surface runs inside the span
-    (the groove has ended) or there is too little surface to fit."""
+    end with at least 4 surface points beyond it. None when the surface runs across the middle
+    half of the span (the groove has ended; its walls near the edges pass for surface within
+    the tolerance) or there is too little surface to fit."""
     outer = (u < -left_m - BRIDGE_MARGIN_M) | (u > right_m + BRIDGE_MARGIN_M)
     near_surface = outer & (np.abs(w) < groove_min_depth_m)
     if near_surface.sum() < 6:
@@ -404,7 +405,7 @@ def _surface_ends(u, w, left_m: float, right_m: float, groove_min_depth_m: float
     residual = w - (intercept + slope * u)
     tolerance = max(3 * _noise(residual[near_surface]), 0.4 * groove_min_depth_m)
     surface = np.abs(residual) < tolerance
-    if np.any(surface & (u > -left_m + BRIDGE_MARGIN_M) & (u < right_m - BRIDGE_MARGIN_M)):
+    if np.any(surface & (u > -left_m / 2) & (u < right_m / 2)):
         return None
     ends = {}
     for side, expected in ((-1, left_m), (1, right_m)):
