@@ -24,15 +24,22 @@ def smooth_points(
     rows, cols = graph_pairs(graph)
     per_row = np.diff(graph.indptr)
     # Pair arithmetic in float32 (millions of pairs); coordinates are taken relative to the
-    # centroid, so the precision stays far below a micrometre. Row-side values are repeated
+    # centroid, so the precision stays far below a micrometre. One coordinate at a time: 1D
+    # gathers are three times faster than gathering rows of three. Row-side values are repeated
     # (rows are contiguous in the graph), which is cheaper than gathering them.
-    local = (points - points.mean(axis=0)).astype(np.float32)
-    delta = local[cols]
-    delta -= np.repeat(local, per_row, axis=0)
-    offsets = np.einsum("ij,ij->i", delta, np.repeat(normals.astype(np.float32), per_row, axis=0))
+    local = (points - points.mean(axis=0)).astype(np.float32).T.copy()
+    along_normal = normals.astype(np.float32).T.copy()
+    offsets = np.zeros(len(cols), np.float32)
+    distance_sq = np.zeros(len(cols), np.float32)
+    for axis in range(3):
+        delta = local[axis].take(cols)
+        delta -= np.repeat(local[axis], per_row)
+        distance_sq += delta * delta
+        delta *= np.repeat(along_normal[axis], per_row)
+        offsets += delta
     # The noise estimate from every 8th pair: the median of millions barely moves.
     sigma = range_sigma_m if range_sigma_m else 2.0 * np.median(np.abs(offsets[::8])) + 1e-9
-    exponent = np.einsum("ij,ij->i", delta, delta) * np.float32(1.0 / (2 * (radius_m / 2) ** 2))
+    exponent = distance_sq * np.float32(1.0 / (2 * (radius_m / 2) ** 2))
     exponent += offsets * offsets * np.float32(1.0 / (2 * sigma**2))
     weights = np.exp(-exponent)
     shift = np.bincount(rows, weights * offsets, len(points)) / np.bincount(rows, weights, len(points))
