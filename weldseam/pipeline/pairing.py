@@ -44,19 +44,20 @@ def pair_midpoints(
     if len(rim) < 4:
         return np.empty((0, 3)), np.empty(0)
     tangents = rim_tangents(rim, tangent_radius_m)
-    pairs = cKDTree(rim).query_pairs(max_width_m, output_type="ndarray")
-    rows = np.concatenate([pairs[:, 0], pairs[:, 1]])
-    cols = np.concatenate([pairs[:, 1], pairs[:, 0]])
-    delta = rim[cols] - rim[rows]
-    length = np.linalg.norm(delta, axis=1)
-    cosine = np.abs(np.einsum("ij,ij->i", delta, tangents[rows])) / np.maximum(length, 1e-12)
-    across = cosine <= np.sin(np.radians(angle_tolerance_deg))
-    # Also perpendicular to the partner's tangent, so both ends agree the pair spans the band.
-    across &= np.abs(np.einsum("ij,ij->i", delta, tangents[cols])) / np.maximum(length, 1e-12) <= np.sin(
-        np.radians(angle_tolerance_deg)
-    )
-    across &= length > 2 * tangent_radius_m
-    rows, cols, length = rows[across], cols[across], length[across]
+    first, second = cKDTree(rim).query_pairs(max_width_m, output_type="ndarray").T
+    # The tests are symmetric in the two points, so each unordered pair is tested once, one
+    # coordinate at a time (1D gathers are ~3x faster than gathering rows of three), and the
+    # pairs that pass are then taken both ways round.
+    delta = [rim[:, k].take(second) - rim[:, k].take(first) for k in range(3)]
+    length = np.sqrt(delta[0] * delta[0] + delta[1] * delta[1] + delta[2] * delta[2])
+    across = length > 2 * tangent_radius_m
+    # Perpendicular to both points' tangents, so both ends agree the pair spans the band.
+    for end in (first, second):
+        along = delta[0] * tangents[:, 0].take(end) + delta[1] * tangents[:, 1].take(end)
+        along += delta[2] * tangents[:, 2].take(end)
+        across &= np.abs(along) / np.maximum(length, 1e-12) <= np.sin(np.radians(angle_tolerance_deg))
+    first, second, length = first[across], second[across], length[across]
+    rows, cols, length = np.concatenate([first, second]), np.concatenate([second, first]), np.concatenate([length] * 2)
     if in_band is not None and len(rows):
         fractions = np.array([0.25, 0.5, 0.75])[:, None, None]
         samples = rim[rows][None] + fractions * (rim[cols] - rim[rows])[None]
