@@ -334,7 +334,7 @@ def _across_hole(
     it, or None.
 
     Sections are tried along the predicted curve (_ahead) from max_gap_m to max_hole_m ahead;
-    the first that fits the joint within 15 % of its distance sideways and 5 % in depth must be
+    the first that fits the joint within 25 % of its distance sideways and 5 % in depth must be
     followed by HOLE_CONFIRM - 1 more fits in a row. The hole is bridged by a cubic Hermite
     curve between the two ends and their travel directions (torch axes interpolated), and that
     curve must be empty: no more than HOLE_STRAYS scan points within HOLE_RADIUS_M of it. For a
