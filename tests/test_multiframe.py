@@ -32,8 +32,7 @@ CASES = [("box", 0, True), ("box", 1, False), ("box", 1, True), ("pipe", 0, True
 # tests/pipeline/test_merge.py), and come and go with the noise: with exact poses and ICP off,
 # seeds 0-4 pass every criterion for 1 box and 1 pipe (with ICP on: 0 and 2).
 KNOWN_GAPS = {
-    ("box", 0, True): {"accuracy"},  # the path stops short on the third face: coverage 0.85
-    ("box", 1, False): {"continuous", "accuracy"},  # the seam comes out in two pieces
+    ("box", 0, True): {"accuracy"},  # the path stops short on the third face: coverage 0.86
 }
 
 

@@ -133,3 +133,18 @@ def test_an_extension_crosses_a_hole_on_a_curved_seam_along_the_curve(rng):
     assert np.abs(radii - RING_RADIUS_M).max() < 0.0005, "the hole is bridged along the ring, not across it"
     assert polyline_length(positions) > 0.95 * 2 * np.pi * RING_RADIUS_M
     assert np.linalg.norm(positions[0] - positions[-1]) <= 3 * STEP_M
+
+
+def test_an_extension_whose_end_leans_into_the_work_still_finds_the_seam_past_a_gap(rng):
+    """The last traced points sink 1 mm into the work over 10 mm (poorly fitted end sections),
+    so the end tangent leans 6 degrees into the plate, and the next 8 mm hold no data: the fits
+    beyond lie 1-2 mm above the predictions, which is still the seam."""
+    points = plate_ending_on_a_table(rng)
+    gap = (points[:, 0] > -0.045) & (points[:, 0] < -0.037)
+    seam = straight_trace(-0.075, -0.047, [0.0, 0.0, -1.0])
+    leaning = seam.positions_m.copy()
+    leaning[:, 2] = -np.clip(leaning[:, 0] + 0.057, 0.0, None) * np.tan(np.radians(6))
+    positions = extended(TracedSeam(leaning, seam.torch_axes, False, "v_groove", 1.0), points[~gap])
+    beyond = positions[positions[:, 0] > -0.035]
+    assert len(beyond) > 10 and np.abs(beyond[:, 1:]).max() < 0.0015
+    assert positions[:, 0].max() > -0.008, "on to the plate end"

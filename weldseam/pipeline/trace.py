@@ -192,16 +192,17 @@ def extend_seam(
     distance from the last fit) of the straight-line prediction sideways (the fit is a
     verified joint profile and the better estimate: near an end the prediction drifts by
     1-3 mm; the bound follows curves of radius down to ~40 mm across the largest gap), and
-    within half a step along the torch axis (the surface does not jump; a section that
-    straddles the part's end face does). Where the straight line finds nothing, the seam may
-    turn 90 degrees over an edge (a groove running over a block's edge, or up a wall): the
-    turned prediction is tried within max_gap_m of the end, and a run of fits there at least
-    TURN_CONFIRM_M long continues the seam on the new face. Where neither finds the seam, it
-    may cross a hole in the scan up to `max_hole_m` long (_across_hole); the hole is filled with
-    interpolated (bridged) points. An extension stops where it comes
-    within two steps of the seam itself (it has gone round a loop; the ends then meet and the
-    seam closes). Run on joined seams only: extending every partial trace would walk the same
-    seam once per piece.
+    within max(half a step, 20 % of the distance) along the torch axis (the surface does not
+    jump, a section that straddles the part's end face does; but an end tangent fitted to end
+    points that drift in depth leans into the work, 1-2 mm over a 12 mm gap). Where the
+    straight line finds nothing, the seam may turn 90 degrees over an edge (a groove running
+    over a block's edge, or up a wall): the turned prediction is tried within max_gap_m of the
+    end, and a run of fits there at least TURN_CONFIRM_M long continues the seam on the new
+    face. Where neither finds the seam, it may cross a hole in the scan up to `max_hole_m` long
+    (_across_hole); the hole is filled with interpolated (bridged) points. An extension stops
+    where it comes within two steps of the seam itself (it has gone round a loop; the ends then
+    meet and the seam closes). Run on joined seams only: extending every partial trace would
+    walk the same seam once per piece.
     """
     if seam.closed or len(seam.positions_m) < 2:
         return seam
@@ -321,7 +322,8 @@ def _next_fit(
     while distance <= max_gap_m:
         predicted, travel = _ahead(last_point, direction, bend, distance)
         fit, depth, sideways = _section_at(points, tree, predicted, travel, last_axis, section_params, template)
-        if fit.joint == joint and sideways <= max(1.5 * step_m, 0.15 * distance) and depth <= 0.5 * step_m:
+        near = sideways <= max(1.5 * step_m, 0.15 * distance) and depth <= max(0.5 * step_m, 0.2 * distance)
+        if fit.joint == joint and near:
             return fit
         distance += step_m
     return None
