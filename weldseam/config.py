@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import tomllib
 from dataclasses import dataclass, field, fields
 from pathlib import Path
@@ -215,17 +216,24 @@ def _coerce(name: str, current, spec: dataclasses.Field, value):
         raise InputError(f"{name} must be three numbers, got {value!r}")
     if isinstance(sample, int) and "float" not in str(spec.type):
         if isinstance(value, int) and not isinstance(value, bool):
-            return value
+            return _not_negative(name, value)
         raise InputError(f"{name} must be an integer, got {value!r}")
     if "float" in str(spec.type):
         if isinstance(value, (int, float)) and not isinstance(value, bool):
-            return float(value)
+            return _not_negative(name, float(value))
         raise InputError(f"{name} must be a number, got {value!r}")
     if not isinstance(value, str):
         raise InputError(f"{name} must be text, got {value!r}")
     choices = spec.metadata["choices"]
     if choices and value not in choices:
         raise InputError(f"{name} must be one of {', '.join(choices)}, got {value!r}")
+    return value
+
+
+def _not_negative(name: str, value):
+    """Every numeric parameter is a length, angle, count or fraction: finite and >= 0."""
+    if not math.isfinite(value) or value < 0:
+        raise InputError(f"{name} must be a finite number >= 0, got {value!r}")
     return value
 
 
