@@ -164,12 +164,16 @@ def _fit_sections(points, tree, centres, travel, axes, lateral, params: SectionP
     fits = []
     for centre, t, a, lat, members in zip(centres, travel, axes, lateral, neighbourhoods):
         u, w, _ = _profile(points[members] - centre, t, a, lat, params)
-        profile = fit_profile(
-            u, w, face_radius_m=params.face_radius_m, groove_min_depth_m=params.groove_min_depth_m,
-            fillet_min_leg_m=params.fillet_min_leg_m,
-        )
-        fits.append(_to_3d(profile, centre, a, lat))
+        fits.append(_to_3d(_fit_profile_with(params, u, w), centre, a, lat))
     return fits
+
+
+def _fit_profile_with(params: SectionParams, u: np.ndarray, w: np.ndarray) -> _ProfileFit | None:
+    """fit_profile with the section parameters."""
+    return fit_profile(
+        u, w, face_radius_m=params.face_radius_m, groove_min_depth_m=params.groove_min_depth_m,
+        fillet_min_leg_m=params.fillet_min_leg_m,
+    )
 
 
 def fit_section(
@@ -185,18 +189,12 @@ def fit_section(
     it is bridged over a sensor dropout (see bridge_groove) from the same profile."""
     axis, lateral = _frame(travel, axis)
     u, w, along = _profile_at(points, tree, centre, travel, axis, lateral, params)
-    profile = fit_profile(
-        u, w, face_radius_m=params.face_radius_m, groove_min_depth_m=params.groove_min_depth_m,
-        fillet_min_leg_m=params.fillet_min_leg_m,
-    )
+    profile = _fit_profile_with(params, u, w)
     if template is None or (profile is not None and profile.joint == V_GROOVE):
         return _to_3d(profile, centre, axis, lateral)
     if template.half_opening_m is not None:
         near = np.abs(u) <= template.half_opening_m + params.face_radius_m / 2
-        profile = fit_profile(
-            u[near], w[near], face_radius_m=params.face_radius_m, groove_min_depth_m=params.groove_min_depth_m,
-            fillet_min_leg_m=params.fillet_min_leg_m,
-        )
+        profile = _fit_profile_with(params, u[near], w[near])
         if profile is not None and profile.joint == V_GROOVE:
             return _to_3d(profile, centre, axis, lateral)
     if not template.edges_seen:
