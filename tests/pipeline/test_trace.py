@@ -4,7 +4,7 @@ from scipy.spatial import cKDTree
 from weldseam.config import SectionConfig
 from weldseam.geometry import polyline_length
 from weldseam.pipeline.section import section_params
-from weldseam.pipeline.trace import TracedSeam, extend_seam
+from weldseam.pipeline.trace import TracedSeam, extend_seam, inside_traced
 
 RING_RADIUS_M = 0.05
 STEP_M = 0.002
@@ -148,3 +148,17 @@ def test_an_extension_whose_end_leans_into_the_work_still_finds_the_seam_past_a_
     beyond = positions[positions[:, 0] > -0.035]
     assert len(beyond) > 10 and np.abs(beyond[:, 1:]).max() < 0.0015
     assert positions[:, 0].max() > -0.008, "on to the plate end"
+
+
+def test_a_line_along_a_traced_grooves_edge_is_inside_it_and_a_line_beside_it_is_not():
+    along = np.arange(0.0, 0.1, STEP_M)
+    seam = TracedSeam(
+        np.column_stack([along, np.zeros_like(along), np.zeros_like(along)]), np.tile([0.0, 0.0, -1.0], (50, 1)),
+        False, "v_groove", 1.0, half_opening_m=0.004,
+    )
+    edge_line = np.column_stack([along[5:40:3], np.full(12, 0.0085), np.zeros(12)])  # 4 + 4.5 mm aside
+    assert inside_traced(edge_line, [seam], beside_m=0.006)
+    assert not inside_traced(edge_line + [0.0, 0.002, 0.0], [seam], beside_m=0.006), "a parallel line 10.5 mm off"
+    past_the_end = np.vstack([edge_line, [0.11, 0.0085, 0.0]])
+    assert not inside_traced(past_the_end, [seam], beside_m=0.006), "a line going on past the seam's end"
+    assert not inside_traced(edge_line, [], beside_m=0.006)

@@ -18,7 +18,7 @@ from scipy.spatial import cKDTree
 from weldseam import __version__
 from weldseam.config import PlanConfig, config_to_dict
 from weldseam.errors import InputError, NoSeamError, StageError, WeldseamError
-from weldseam.geometry import transform_points, unit
+from weldseam.geometry import polyline_length, transform_points, unit
 from weldseam.pipeline.assemble import assemble_seams
 from weldseam.pipeline.boundary import boundary_mask
 from weldseam.pipeline.condition import condition_points, sparse_points
@@ -35,7 +35,7 @@ from weldseam.pipeline.segment import automatic_threshold, cluster_candidates
 from weldseam.pipeline.smooth import smooth_points
 from weldseam.pipeline.support import find_support_plane
 from weldseam.pipeline.thinning import thin_points
-from weldseam.pipeline.trace import TracedSeam, trace_chain
+from weldseam.pipeline.trace import TracedSeam, inside_traced, trace_chain
 from weldseam.types import RunResult, Scan, WeldPath
 
 STAGES = (
@@ -165,7 +165,7 @@ def plan_paths(
     working_tree = cKDTree(working)
 
     params = section_params(c.section, c.condition.voxel_m)
-    traced: list[TracedSeam] = []
+    chains = []
     for members in clusters:
         in_cluster = np.zeros(len(working), dtype=bool)
         in_cluster[members] = True
@@ -193,18 +193,27 @@ def plan_paths(
         with stage("grid"):
             nodes = voxel_centroids(thinned, c.grid.leaf_m)
         with stage("order"):
-            chains = order_chains(nodes, link_m=c.order.link_m, min_branch_m=c.order.min_branch_m)
-        with stage("section"):
-            for chain in chains:
-                approx_axes = _approximate_torch_axes(
-                    chain.points, working, normals, working_tree, c.section.face_radius_m
-                )
-                traced += trace_chain(
-                    chain, approx_axes, fine, fine_tree,
-                    step_m=c.resample.spacing_m, max_gap_m=c.section.max_gap_m,
-                    min_valid_fraction=c.section.min_valid_fraction, section_params=params,
-                )
+            chains += order_chains(nodes, link_m=c.order.link_m, min_branch_m=c.order.min_branch_m)
     with stage("section"):
+        # Longest chains first; a chain within face_radius / 2 of the opening of a groove traced
+        # before is skipped (fit_section takes that as the groove's reach). The pieces are then
+        # taken in chain order, as found.
+        by_length = sorted(range(len(chains)), key=lambda k: -polyline_length(chains[k].points))
+        pieces: dict[int, list[TracedSeam]] = {}
+        for k in by_length:
+            if inside_traced(
+                chains[k].points, [seam for found in pieces.values() for seam in found], c.section.face_radius_m / 2
+            ):
+                continue
+            approx_axes = _approximate_torch_axes(
+                chains[k].points, working, normals, working_tree, c.section.face_radius_m
+            )
+            pieces[k] = trace_chain(
+                chains[k], approx_axes, fine, fine_tree,
+                step_m=c.resample.spacing_m, max_gap_m=c.section.max_gap_m,
+                min_valid_fraction=c.section.min_valid_fraction, section_params=params,
+            )
+        traced = [seam for k in sorted(pieces) for seam in pieces[k]]
         seams = assemble_seams(
             traced, fine, fine_tree, support=support, support_tolerance_m=SUPPORT_TOLERANCE_M,
             overlap_m=c.order.overlap_m, join_m=c.order.join_m, max_turn_deg=c.order.max_join_turn_deg,

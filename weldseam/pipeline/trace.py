@@ -54,8 +54,9 @@ class Hole:
 
 @dataclass(frozen=True)
 class TracedSeam:
-    """Seam points (K, 3) and torch axes (K, 3) in travel order, and the holes in the scan
-    the seam was interpolated across (extend_seam)."""
+    """Seam points (K, 3) and torch axes (K, 3) in travel order, the holes in the scan the
+    seam was interpolated across (extend_seam), and, for a groove, the median half-width of
+    its opening (m) as traced."""
 
     positions_m: np.ndarray
     torch_axes: np.ndarray
@@ -63,6 +64,7 @@ class TracedSeam:
     joint: str
     confidence: float
     holes: tuple[Hole, ...] = ()
+    half_opening_m: float = 0.0
 
 
 def trace_chain(
@@ -107,9 +109,22 @@ def trace_chain(
                 closed=closed,
                 joint=joint,
                 confidence=round(confidence, 3),
+                half_opening_m=float(np.median([fit.half_opening_m for fit in run_fits])),
             )
         )
     return seams
+
+
+def inside_traced(points: np.ndarray, seams: list[TracedSeam], beside_m: float) -> bool:
+    """Whether each of `points` (K, 3) lies inside the opening of one of `seams` or within
+    `beside_m` of it: within its half-opening + beside_m of one of its seam points. The crease
+    band of a groove often breaks into lines along its edges, and each traces (re-centred) to
+    the seam itself: once the seam is traced, tracing such a line again adds nothing."""
+    covered = np.zeros(len(points), bool)
+    for seam in seams:
+        reach = seam.half_opening_m + beside_m
+        covered |= cKDTree(seam.positions_m).query(points, distance_upper_bound=reach)[0] <= reach
+    return bool(covered.all())
 
 
 def _consistent(seam_points: list[np.ndarray], step_m: float) -> np.ndarray:
