@@ -32,7 +32,9 @@ CASES = [("box", 0, True), ("box", 1, False), ("box", 1, True), ("pipe", 0, True
 # tests/pipeline/test_merge.py), and come and go with the noise: with exact poses and ICP off,
 # seeds 0-4 pass every criterion for 1 box and 1 pipe (with ICP on: 0 and 2).
 KNOWN_GAPS = {
-    ("box", 0, True): {"accuracy"},  # the path stops short on the third face: coverage 0.86
+    # Coverage 0.92: the last 18 mm of the third face lie in a sensor dropout that reaches the
+    # seam's end (no point within 10 mm of the seam there), so nothing is beyond it to cross to.
+    ("box", 0, True): {"accuracy"},
 }
 
 

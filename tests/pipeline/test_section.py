@@ -1,4 +1,5 @@
 import numpy as np
+import pytest
 from scipy.spatial import cKDTree
 
 from weldseam.config import SectionConfig
@@ -51,6 +52,19 @@ def test_groove_with_one_hidden_wall_is_still_centred(rng):
     hidden = (u > 0) & (u < 0.008)  # the right wall is not seen
     fit = fit_profile(u[~hidden], w[~hidden], **PARAMS)
     assert fit.joint == V_GROOVE and abs(fit.u) < 0.0006
+
+
+@pytest.mark.parametrize("tilt_deg", [0.0, 25.0])
+def test_a_dropout_going_on_past_a_hidden_walls_edge_gives_no_fit_rather_than_a_wider_groove(rng, tilt_deg):
+    plate_u, plate_w = profile(v_groove(0.0), rng)
+    c, s = np.cos(np.radians(tilt_deg)), np.sin(np.radians(tilt_deg))  # the frame turned against the plate
+    u, w = c * plate_u - s * plate_w, s * plate_u + c * plate_w
+    for shadow_m in (0.0, 0.001):  # the hidden wall's edge is seen, or 1 mm more is lost: still a fit
+        unseen = (plate_u > 0) & (plate_u < 0.008 + shadow_m)
+        fit = fit_profile(u[~unseen], w[~unseen], **PARAMS)
+        assert fit.joint == V_GROOVE and abs(c * fit.u + s * fit.w) < 0.0003 + shadow_m / 2, shadow_m
+    unseen = (plate_u > 0) & (plate_u < 0.016)  # the dropout runs 8 mm onto the plate: that edge is not seen
+    assert fit_profile(u[~unseen], w[~unseen], **PARAMS) is None
 
 
 def test_a_groove_in_depth_quantised_in_1_mm_steps_is_found(rng):

@@ -38,6 +38,11 @@ BRIDGE_HOLE_M = 0.004
 # and the next 1 mm below; the median deviation is then ~0 and that level would pass for a
 # depression. 1 mm / sqrt(12) = 0.29 mm.
 SURFACE_NOISE_FLOOR_M = 0.0003
+# A groove edge put at the last surface point may lie this far beyond the mirror image of the
+# other edge about the groove bottom (_groove_edges). With one wall hidden, the bottom (the
+# median of the deepest points) sits up the visible wall, measured up to 1.2 mm, so the mirror
+# falls up to ~2.5 mm short; the edges scatter by ~0.5 mm more.
+HIDDEN_EDGE_SLACK_M = 0.004
 # A section fit this far from its centre, or with its torch axis this far from the frame's, is
 # fitted again in its own frame.
 RECENTRE_M = 0.003
@@ -325,7 +330,7 @@ def _fit_groove(u: np.ndarray, w: np.ndarray, face_radius_m: float, min_depth_m:
         return None
     if _upper_decile(depth[groove]) < min_depth_m:
         return None
-    edges = _groove_edges(u, depth, groove, u[left_surface].max(), u[right_surface].min())
+    edges = _groove_edges(u, depth, groove, u[left_surface].max(), u[right_surface].min(), slope)
     if edges is None:
         return None
     u_left, u_right = edges
@@ -416,7 +421,9 @@ def _surface_ends(u, w, left_m: float, right_m: float, groove_min_depth_m: float
     return surface, ends
 
 
-def _groove_edges(u, depth, groove, left_surface_end, right_surface_end) -> tuple[float, float] | None:
+def _groove_edges(
+    u, depth, groove, left_surface_end, right_surface_end, surface_slope: float
+) -> tuple[float, float] | None:
     """Where each groove wall meets the surface (depth 0), or None when neither wall is
     seen: a bevelled wall facing the camera is always visible, so a depression with two
     hidden (vertical) walls is a hole or a slot, not a V-groove.
@@ -425,7 +432,13 @@ def _groove_edges(u, depth, groove, left_surface_end, right_surface_end) -> tupl
     15-80 %); a robust line depth = c + m u through them is solved for depth 0.
     A wall too short to fit on its own takes the other wall's slope mirrored (bevels are
     symmetric) and fits only its offset. A hidden wall (no points: it faces away from the
-    camera) ends at the last surface point, which the camera sees right up to the edge.
+    camera) ends at the last surface point, which the camera sees right up to the edge. An edge
+    put at the last surface point (a hidden wall, or a wall line that meets the surface out of
+    range) lying more than HIDDEN_EDGE_SLACK_M beyond the mirror image of the other edge about
+    the groove bottom (bevels are symmetric) is not seen: a dropout or a shadow goes on past the
+    edge onto the plate, and there is no fit. The bottom is mirrored about its foot on the
+    surface line w = c + s u (`surface_slope` s; `depth` is measured vertically from it), at
+    u - depth s / (1 + s^2).
     The last surface point is not used for a visible wall: its shallowest points pass for
     surface, so that point lies ~1 mm inside the edge, and the bias differs side to side.
     """
@@ -447,14 +460,17 @@ def _groove_edges(u, depth, groove, left_surface_end, right_surface_end) -> tupl
     ):
         if slope is None and other is not None and len(wall) >= 2:
             slope = -other
-        if slope is None:
-            edges.append(float(surface_end))
-            continue
-        offset = _median(depth[wall] - slope * u[wall])
-        edge = -offset / slope
-        # Between 3 mm outside the last surface point and the middle of the wall.
-        low, high = sorted((surface_end + side * 0.003, u[wall].mean()))
-        edges.append(float(edge) if low <= edge <= high else float(surface_end))
+        edge = surface_end
+        if slope is not None:
+            offset = _median(depth[wall] - slope * u[wall])
+            # Between 3 mm outside the last surface point and the middle of the wall.
+            low, high = sorted((surface_end + side * 0.003, u[wall].mean()))
+            edge = -offset / slope if low <= -offset / slope <= high else surface_end
+        edges.append(float(edge))
+    foot = bottom - deepest * surface_slope / (1 + surface_slope**2)
+    for side, edge, other, surface_end in zip((-1, 1), edges, edges[::-1], (left_surface_end, right_surface_end)):
+        if edge == surface_end and side * (edge - (2 * foot - other)) > HIDDEN_EDGE_SLACK_M:
+            return None
     return edges[0], edges[1]
 
 
