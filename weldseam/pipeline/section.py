@@ -432,13 +432,12 @@ def _groove_edges(
     15-80 %); a robust line depth = c + m u through them is solved for depth 0.
     A wall too short to fit on its own takes the other wall's slope mirrored (bevels are
     symmetric) and fits only its offset. A hidden wall (no points: it faces away from the
-    camera) ends at the last surface point, which the camera sees right up to the edge. An edge
-    put at the last surface point (a hidden wall, or a wall line that meets the surface out of
-    range) lying more than HIDDEN_EDGE_SLACK_M beyond the mirror image of the other edge about
-    the groove bottom (bevels are symmetric) is not seen: a dropout or a shadow goes on past the
-    edge onto the plate, and there is no fit. The bottom is mirrored about its foot on the
-    surface line w = c + s u (`surface_slope` s; `depth` is measured vertically from it), at
-    u - depth s / (1 + s^2).
+    camera) ends at the last surface point, which the camera sees right up to the edge.
+    Such an edge (or one whose wall line meets the surface out of range) lying more than
+    HIDDEN_EDGE_SLACK_M beyond the mirror image of the other edge about the groove bottom is
+    not seen: a dropout or a shadow goes on past it onto the plate, and there is no fit. The
+    bottom is mirrored about its foot on the surface line w = c + s u (`surface_slope` s;
+    `depth` is measured vertically from that line): u - depth s / (1 + s^2).
     The last surface point is not used for a visible wall: its shallowest points pass for
     surface, so that point lies ~1 mm inside the edge, and the bias differs side to side.
     """
@@ -454,22 +453,23 @@ def _groove_edges(
     slopes = [_wall_slope(u[wall], depth[wall], side) for wall, side in zip(walls, (-1, 1))]
     if slopes == [None, None]:
         return None
-    edges = []
+    edges, at_surface_end = [], []
     for side, wall, slope, other, surface_end in zip(
         (-1, 1), walls, slopes, slopes[::-1], (left_surface_end, right_surface_end)
     ):
         if slope is None and other is not None and len(wall) >= 2:
             slope = -other
-        edge = surface_end
+        edge = None
         if slope is not None:
-            offset = _median(depth[wall] - slope * u[wall])
+            edge = -_median(depth[wall] - slope * u[wall]) / slope
             # Between 3 mm outside the last surface point and the middle of the wall.
             low, high = sorted((surface_end + side * 0.003, u[wall].mean()))
-            edge = -offset / slope if low <= -offset / slope <= high else surface_end
-        edges.append(float(edge))
+            edge = edge if low <= edge <= high else None
+        at_surface_end.append(edge is None)
+        edges.append(float(surface_end if edge is None else edge))
     foot = bottom - deepest * surface_slope / (1 + surface_slope**2)
-    for side, edge, other, surface_end in zip((-1, 1), edges, edges[::-1], (left_surface_end, right_surface_end)):
-        if edge == surface_end and side * (edge - (2 * foot - other)) > HIDDEN_EDGE_SLACK_M:
+    for side, edge, other, unseen in zip((-1, 1), edges, edges[::-1], at_surface_end):
+        if unseen and side * (edge - (2 * foot - other)) > HIDDEN_EDGE_SLACK_M:
             return None
     return edges[0], edges[1]
 
