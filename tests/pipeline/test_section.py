@@ -12,8 +12,10 @@ from weldseam.pipeline.section import (
     bridge_groove,
     fit_profile,
     fit_section,
+    groove_bottom,
     groove_template,
     section_params,
+    sees_past_end,
 )
 from weldseam.synthetic.scenes import FAMILIES, make_scan
 
@@ -242,3 +244,18 @@ def test_the_template_finds_both_surface_ends_of_a_noisy_groove(rng):
         measured += [template.left_m, template.right_m]
     assert None not in measured
     assert np.all(np.abs(np.array(measured) - 0.006) < 0.0025)
+
+
+def test_past_a_plate_end_the_table_is_seen_below_the_grooves_bottom(rng):
+    """A 12 mm plate (end x = 0) with a 6 mm deep groove along x, on a table at z = -0.012."""
+    x, y = np.meshgrid(np.arange(-0.06, 0.03, 0.0008), np.arange(-0.03, 0.03, 0.0008))
+    x, y = x.ravel(), y.ravel()
+    points = np.column_stack([x, y, np.where(x < 0, v_groove(0.0, half_open=0.006, depth=0.006)(y), -0.012)])
+    points += rng.normal(0, 0.0001, points.shape)
+    tree, params = cKDTree(points), section_params(SectionConfig(), voxel_m=0.001)
+    travel, axis = np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.0, -1.0])
+    near_end, far_from_end = (fit_section(points, tree, np.array([x, 0.0, 0.0]), travel, axis, params)
+                              for x in (-0.004, -0.03))  # fmt: skip
+    assert 0.005 < groove_bottom(points, tree, near_end, travel, params) <= 0.006  # depths even over 0-6 mm: ~5.4
+    assert sees_past_end(points, tree, near_end, travel, 0.012, 0.006, params), "the table, 4 mm on"
+    assert not sees_past_end(points, tree, far_from_end, travel, 0.012, 0.006, params), "the groove goes on"

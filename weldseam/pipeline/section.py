@@ -42,6 +42,11 @@ SURFACE_NOISE_FLOOR_M = 0.0003
 # fitted again in its own frame.
 RECENTRE_M = 0.003
 RECENTRE_COS = float(np.cos(np.radians(8.0)))
+# Seeing past a part's end (sees_past_end): this many points (not a stray outlier or two) this far
+# below the groove's bottom, beyond where depth noise puts a groove point (~0.5 mm sigma at 0.45 m,
+# in 1 mm steps). A groove with less plate than that under its root is not seen past this way.
+PAST_END_POINTS = 4
+PAST_END_MARGIN_M = 0.002
 
 @dataclass(frozen=True)
 class SectionFit:
@@ -212,6 +217,39 @@ def groove_template(points: np.ndarray, tree, fit: SectionFit, travel: np.ndarra
     found = _surface_ends(u, w, fit.half_opening_m, fit.half_opening_m, params.groove_min_depth_m)
     ends = found[1] if found is not None else {}
     return GrooveTemplate(-ends[-1] if -1 in ends else None, ends[1] if 1 in ends else None, fit.half_opening_m)
+
+
+def groove_bottom(points: np.ndarray, tree, fit: SectionFit, travel: np.ndarray, params: SectionParams):
+    """How deep a groove fit's groove is (m below its surface line): the upper decile of the
+    depths of the points in its opening (|u| <= half-opening) within its slab; None with fewer
+    than PAST_END_POINTS points there (a fillet has no opening)."""
+    along, u, depth = _fit_offsets(points, tree, fit, travel, fit.point_m, params.half_width_m)
+    inside = (np.abs(u) <= fit.half_opening_m) & (np.abs(along) <= params.slab_m / 2)
+    return _upper_decile(depth[inside]) if np.count_nonzero(inside) >= PAST_END_POINTS else None
+
+
+def sees_past_end(
+    points: np.ndarray, tree, fit: SectionFit, travel: np.ndarray, reach_m: float, bottom_m: float,
+    params: SectionParams,
+) -> bool:
+    """Whether the scan sees past the part's end within `reach_m` ahead of a groove fit: at least
+    PAST_END_POINTS points ahead of its section (0 < along <= reach_m) and within its opening
+    (|u| <= half-opening) lie deeper than the groove's bottom `bottom_m` + PAST_END_MARGIN_M.
+    Through the opening of a groove that goes on, the camera sees the groove; past the plate's
+    end it sees what lies behind it (the table, the floor); in a hole it sees nothing."""
+    centre = fit.point_m + reach_m / 2 * travel
+    along, u, depth = _fit_offsets(points, tree, fit, travel, centre, reach_m / 2 + params.half_width_m)
+    ahead = (along > 0) & (along <= reach_m) & (np.abs(u) <= fit.half_opening_m)
+    beyond = ahead & (depth > bottom_m + PAST_END_MARGIN_M)
+    return np.count_nonzero(beyond) >= PAST_END_POINTS
+
+
+def _fit_offsets(points, tree, fit: SectionFit, travel, centre, radius_m: float):
+    """(along, u, depth) (m) of the points within `radius_m` of `centre`, from the fit's seam
+    point: along `travel`, along its lateral and along its torch axis (into the work)."""
+    axis, lateral = _frame(travel, fit.torch_axis)
+    offsets = points[tree.query_ball_point(centre, radius_m)] - fit.point_m
+    return offsets @ travel, offsets @ lateral, offsets @ axis
 
 
 def _frame(travel: np.ndarray, axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
