@@ -259,3 +259,7 @@ def test_past_a_plate_end_the_table_is_seen_below_the_grooves_bottom(rng):
     assert 0.005 < groove_bottom(points, tree, near_end, travel, params) <= 0.006  # depths even over 0-6 mm: ~5.4
     assert sees_past_end(points, tree, near_end, travel, 0.012, 0.006, params), "the table, 4 mm on"
     assert not sees_past_end(points, tree, far_from_end, travel, 0.012, 0.006, params), "the groove goes on"
+    x, y = points[:, 0], points[:, 1]
+    gap = (x > -0.03) & (x < 0) & (np.abs(y) < 0.0008)
+    points[gap, 2] = -0.012  # a 1.6 mm root gap: the table is seen along the seam line
+    assert not sees_past_end(points, cKDTree(points), far_from_end, travel, 0.012, 0.006, params)

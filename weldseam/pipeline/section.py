@@ -234,14 +234,16 @@ def sees_past_end(
 ) -> bool:
     """Whether the scan sees past the part's end within `reach_m` ahead of a groove fit: at least
     PAST_END_POINTS points ahead of its section (0 < along <= reach_m) and within its opening
-    (|u| <= half-opening) lie deeper than the groove's bottom `bottom_m` + PAST_END_MARGIN_M.
-    Through the opening of a groove that goes on, the camera sees the groove; past the plate's
-    end it sees what lies behind it (the table, the floor); in a hole it sees nothing."""
+    (|u| <= half-opening) lie deeper than the groove's bottom `bottom_m` + PAST_END_MARGIN_M,
+    spread across at least half the opening's width. Through the opening of a groove that goes
+    on, the camera sees the groove (and through a root gap, what lies behind it along the seam
+    line only); past the plate's end it sees what lies behind it (the table, the floor); in a
+    hole it sees nothing."""
     centre = fit.point_m + reach_m / 2 * travel
     along, u, depth = _fit_offsets(points, tree, fit, travel, centre, reach_m / 2 + params.half_width_m)
     ahead = (along > 0) & (along <= reach_m) & (np.abs(u) <= fit.half_opening_m)
     beyond = ahead & (depth > bottom_m + PAST_END_MARGIN_M)
-    return np.count_nonzero(beyond) >= PAST_END_POINTS
+    return np.count_nonzero(beyond) >= PAST_END_POINTS and np.ptp(u[beyond]) >= fit.half_opening_m
 
 
 def _fit_offsets(points, tree, fit: SectionFit, travel, centre, radius_m: float):
