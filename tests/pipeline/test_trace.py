@@ -143,6 +143,31 @@ def test_one_section_beyond_a_hole_with_nothing_seen_past_it_does_not_carry_the_
     assert positions[:, 0].max() < -0.04
 
 
+def plate_with_an_oblique_end(rng):
+    """A 12 mm plate (top z = 0) with a 6 mm deep groove along x, on a table (z = -0.012), seen
+    from above; its end x = y crosses the groove at 45 degrees (the seam ends at x = 0). Returns
+    the points and whether each is on the plate."""
+    x, y = grid((-0.08, 0.04), (-0.03, 0.03))
+    on_plate = x < y
+    points = np.column_stack([x, y, np.where(on_plate, -v_depth(y, depth=0.006), -0.012)])
+    return points + rng.normal(0, 0.0001, points.shape), on_plate
+
+
+def test_an_extension_follows_a_groove_to_where_an_oblique_plate_end_crosses_it(rng):
+    """Over the last 6 mm the plate on one side has ended and the table shows there."""
+    points, _ = plate_with_an_oblique_end(rng)
+    positions = extended(straight_trace(-0.075, -0.055, [0.0, 0.0, -1.0]), points)
+    assert -0.002 < positions[:, 0].max() < 0.001, "to the seam's end, not beyond it"
+    assert np.abs(positions[:, 1:]).max() < 0.001
+
+
+def test_an_extension_does_not_pass_an_oblique_plate_end_with_nothing_seen_past_it(rng):
+    """Without the table, one side's plate ending is no sign that the seam ends just ahead."""
+    points, on_plate = plate_with_an_oblique_end(rng)
+    positions = extended(straight_trace(-0.075, -0.055, [0.0, 0.0, -1.0]), points[on_plate])
+    assert positions[:, 0].max() < 0.0
+
+
 def test_an_extension_never_crosses_where_the_groove_stops_and_flat_plate_goes_on(rng):
     """A groove along x interrupted for 20 mm (-0.04 < x < -0.02) by flat plate, then going on:
     two seams in line, and the weld must not be carried across the flat stretch."""

@@ -319,15 +319,15 @@ def _end_templates(positions, axes, points, tree, joint, section_params) -> list
 
 
 def _median_template(templates: list[GrooveTemplate | None]) -> GrooveTemplate | None:
-    """Per side, and for the half-opening, the median of the latest TEMPLATE_MEMORY templates
-    that measured it (None for one measured in fewer than half of them); None when nothing
-    qualifies."""
+    """Per side, and for the half-opening and the bottom, the median of the latest
+    TEMPLATE_MEMORY templates that measured it (None for one measured in fewer than half of
+    them); None when nothing qualifies."""
     recent = templates[-TEMPLATE_MEMORY:]
     values = []
-    for name in ("left_m", "right_m", "half_opening_m"):
+    for name in ("left_m", "right_m", "half_opening_m", "bottom_m"):
         measured = [getattr(t, name) for t in recent if t is not None and getattr(t, name) is not None]
         values.append(float(np.median(measured)) if len(measured) >= max(2, len(recent) / 2) else None)
-    return GrooveTemplate(*values) if values != [None, None, None] else None
+    return GrooveTemplate(*values) if any(v is not None for v in values) else None
 
 
 def _next_fit(
