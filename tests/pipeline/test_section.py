@@ -13,8 +13,10 @@ from weldseam.pipeline.section import (
     bridge_groove,
     fit_profile,
     fit_section,
+    groove_bottom,
     groove_template,
     section_params,
+    sees_past_end,
 )
 from weldseam.synthetic.scenes import FAMILIES, make_scan
 
@@ -256,3 +258,42 @@ def test_the_template_finds_both_surface_ends_of_a_noisy_groove(rng):
         measured += [template.left_m, template.right_m]
     assert None not in measured
     assert np.all(np.abs(np.array(measured) - 0.006) < 0.0025)
+
+
+def test_past_a_plate_end_the_table_is_seen_below_the_grooves_bottom(rng):
+    """A 12 mm plate (end x = 0) with a 6 mm deep groove along x, on a table at z = -0.012."""
+    x, y = np.meshgrid(np.arange(-0.06, 0.03, 0.0008), np.arange(-0.03, 0.03, 0.0008))
+    x, y = x.ravel(), y.ravel()
+    points = np.column_stack([x, y, np.where(x < 0, v_groove(0.0, half_open=0.006, depth=0.006)(y), -0.012)])
+    points += rng.normal(0, 0.0001, points.shape)
+    tree, params = cKDTree(points), section_params(SectionConfig(), voxel_m=0.001)
+    travel, axis = np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.0, -1.0])
+    near_end, far_from_end = (fit_section(points, tree, np.array([x, 0.0, 0.0]), travel, axis, params)
+                              for x in (-0.004, -0.03))  # fmt: skip
+    assert 0.005 < groove_bottom(points, tree, near_end, travel, params) <= 0.006  # depths even over 0-6 mm: ~5.4
+    assert sees_past_end(points, tree, near_end, travel, 0.012, 0.006, params), "the table, 4 mm on"
+    assert not sees_past_end(points, tree, far_from_end, travel, 0.012, 0.006, params), "the groove goes on"
+    x, y = points[:, 0], points[:, 1]
+    gap = (x > -0.03) & (x < 0) & (np.abs(y) < 0.0008)
+    points[gap, 2] = -0.012  # a 1.6 mm root gap: the table is seen along the seam line
+    assert not sees_past_end(points, cKDTree(points), far_from_end, travel, 0.012, 0.006, params)
+
+
+def oblique_end_profile(rng, edge_u):
+    """u, w, along of a groove centred at u = 0.0005 (10 mm deep, surface ends at -0.0065 and
+    0.0075) whose right-hand plate has ended at `edge_u`: the table (w = -0.016) beyond it; three
+    samples per u spread along the slab."""
+    u = np.tile(np.arange(-0.025, 0.025, 0.0004), 3)
+    w = np.where(u > edge_u, -0.016, v_groove(0.0005, half_open=0.007)(u)) + rng.normal(0, 0.0002, len(u))
+    return u, w, rng.uniform(-0.0015, 0.0015, len(u))
+
+
+def test_a_groove_past_one_side_of_an_oblique_plate_end_is_bridged_only_where_the_part_ends(rng):
+    template = GrooveTemplate(left_m=0.0067, right_m=0.0067, half_opening_m=0.007, bottom_m=0.009)
+    bridge = dict(face_radius_m=0.012, groove_min_depth_m=0.0015)
+    u, w, along = oblique_end_profile(rng, edge_u=0.0025)
+    assert bridge_groove(u, w, along, template, **bridge) is None, "no surface beyond: not a hole"
+    fit = bridge_groove(u, w, along, template, **bridge, part_ends=True)
+    assert fit.joint == V_GROOVE and abs(fit.u - 0.0005) < 0.0006
+    u, w, along = oblique_end_profile(rng, edge_u=-0.002)  # the end has crossed the seam line
+    assert bridge_groove(u, w, along, template, **bridge, part_ends=True) is None

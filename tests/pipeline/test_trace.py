@@ -114,6 +114,60 @@ def test_an_extension_crosses_a_hole_in_the_scan_and_goes_on_to_the_plate_end(rn
     assert extended(seam, points[~hole], max_hole_m=0.0)[:, 0].max() < -0.04, "max_hole_m = 0: stops at the hole"
 
 
+def plate_with_a_hole_up_to_its_end(rng):
+    """A 12 mm plate (top z = 0, end x = 0) with a 6 mm deep groove along x on a table (z = -0.012),
+    seen from above; a dropout covers the groove's last 45 mm but for a strip at 2.6-4 mm from the
+    end, where one section fits. Returns the points and whether each is on the table."""
+    x, y = grid((-0.08, 0.04), (-0.03, 0.03))
+    points = np.column_stack([x, y, np.where(x < 0, -v_depth(y, depth=0.006), -0.012)])
+    points += rng.normal(0, 0.0001, points.shape)
+    x = points[:, 0]
+    kept = ~(((x > -0.045) & (x < -0.004)) | ((x > -0.0026) & (x < 0)))
+    return points[kept], x[kept] >= 0
+
+
+def test_an_extension_crosses_a_hole_to_one_section_before_the_plate_end(rng):
+    """One fit beyond the hole, and the table seen right after it: the part ends there."""
+    points, _ = plate_with_a_hole_up_to_its_end(rng)
+    positions = extended(straight_trace(-0.075, -0.055, [0.0, 0.0, -1.0]), points)
+    across = positions[(positions[:, 0] > -0.046) & (positions[:, 0] < -0.004)]
+    assert np.diff(np.sort(across[:, 0])).max() < 1.5 * STEP_M, "the hole is filled with poses"
+    assert np.abs(positions[:, 1:]).max() < 0.0015
+    assert -0.0035 < positions[:, 0].max() < 0.002, "on to the plate end, not beyond it"
+
+
+def test_one_section_beyond_a_hole_with_nothing_seen_past_it_does_not_carry_the_seam_across(rng):
+    """Without the table behind the plate's end, the one fit could be a stray inside a longer hole."""
+    points, on_table = plate_with_a_hole_up_to_its_end(rng)
+    positions = extended(straight_trace(-0.075, -0.055, [0.0, 0.0, -1.0]), points[~on_table])
+    assert positions[:, 0].max() < -0.04
+
+
+def plate_with_an_oblique_end(rng):
+    """A 12 mm plate (top z = 0) with a 6 mm deep groove along x, on a table (z = -0.012), seen
+    from above; its end x = y crosses the groove at 45 degrees (the seam ends at x = 0). Returns
+    the points and whether each is on the plate."""
+    x, y = grid((-0.08, 0.04), (-0.03, 0.03))
+    on_plate = x < y
+    points = np.column_stack([x, y, np.where(on_plate, -v_depth(y, depth=0.006), -0.012)])
+    return points + rng.normal(0, 0.0001, points.shape), on_plate
+
+
+def test_an_extension_follows_a_groove_to_where_an_oblique_plate_end_crosses_it(rng):
+    """Over the last 6 mm the plate on one side has ended and the table shows there."""
+    points, _ = plate_with_an_oblique_end(rng)
+    positions = extended(straight_trace(-0.075, -0.055, [0.0, 0.0, -1.0]), points)
+    assert -0.002 < positions[:, 0].max() < 0.001, "to the seam's end, not beyond it"
+    assert np.abs(positions[:, 1:]).max() < 0.001
+
+
+def test_an_extension_does_not_pass_an_oblique_plate_end_with_nothing_seen_past_it(rng):
+    """Without the table, one side's plate ending is no sign that the seam ends just ahead."""
+    points, on_plate = plate_with_an_oblique_end(rng)
+    positions = extended(straight_trace(-0.075, -0.055, [0.0, 0.0, -1.0]), points[on_plate])
+    assert positions[:, 0].max() < 0.0
+
+
 def test_an_extension_never_crosses_where_the_groove_stops_and_flat_plate_goes_on(rng):
     """A groove along x interrupted for 20 mm (-0.04 < x < -0.02) by flat plate, then going on:
     two seams in line, and the weld must not be carried across the flat stretch."""

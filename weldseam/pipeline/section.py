@@ -47,6 +47,11 @@ HIDDEN_EDGE_SLACK_M = 0.004
 # fitted again in its own frame.
 RECENTRE_M = 0.003
 RECENTRE_COS = float(np.cos(np.radians(8.0)))
+# Seeing past a part's end (sees_past_end): this many points (not a stray outlier or two) this far
+# below the groove's bottom, beyond where depth noise puts a groove point (~0.5 mm sigma at 0.45 m,
+# in 1 mm steps). A groove with less plate than that under its root is not seen past this way.
+PAST_END_POINTS = 4
+PAST_END_MARGIN_M = 0.002
 
 @dataclass(frozen=True)
 class SectionFit:
@@ -65,11 +70,13 @@ class SectionFit:
 class GrooveTemplate:
     """What the sections before know of a groove: where the plate surface ends beside it, as
     _surface_ends finds it (distances (m) from the seam point to the last surface point on the
-    left (-lateral) and right sides; None: not seen), and half the width of its opening (m)."""
+    left (-lateral) and right sides; None: not seen), half the width of its opening (m) and its
+    depth below the surface (m, groove_bottom)."""
 
     left_m: float | None
     right_m: float | None
     half_opening_m: float | None = None
+    bottom_m: float | None = None
 
     @property
     def edges_seen(self) -> bool:
@@ -191,7 +198,9 @@ def fit_section(
     is fitted again within half the groove's opening + face_radius / 2 of the centre (where a
     plate edge crosses the section obliquely, the table beyond it sits beside the groove and
     spoils the surface line); failing that, where the surface ends beside the groove are known,
-    it is bridged over a sensor dropout (see bridge_groove) from the same profile."""
+    it is bridged over a sensor dropout (see bridge_groove) from the same profile, or, where the
+    scan sees past the part's end ahead (_part_ends_ahead), over an end that crosses the groove
+    obliquely."""
     axis, lateral = _frame(travel, axis)
     u, w, along = _profile_at(points, tree, centre, travel, axis, lateral, params)
     profile = _fit_profile_with(params, u, w)
@@ -204,10 +213,22 @@ def fit_section(
             return _to_3d(profile, centre, axis, lateral)
     if not template.edges_seen:
         return _to_3d(None, centre, axis, lateral)
-    bridged = bridge_groove(
-        u, w, along, template, face_radius_m=params.face_radius_m, groove_min_depth_m=params.groove_min_depth_m
-    )
+    bridge = dict(face_radius_m=params.face_radius_m, groove_min_depth_m=params.groove_min_depth_m)
+    bridged = bridge_groove(u, w, along, template, **bridge)
+    if bridged is None and _part_ends_ahead(points, tree, centre, travel, axis, template, params):
+        bridged = bridge_groove(u, w, along, template, **bridge, part_ends=True)
     return replace(_to_3d(bridged, centre, axis, lateral), bridged=True)
+
+
+def _part_ends_ahead(points, tree, centre, travel, axis, template: GrooveTemplate, params: SectionParams) -> bool:
+    """Whether the scan sees past the part's end (sees_past_end) within the section window's
+    reach (half_width_m) ahead of `centre`, on the groove the template describes. An end that
+    crosses the groove at up to 70 degrees from square ends the plate on one side up to
+    tan(70) x half-opening before the seam line (22 mm for an 8 mm half-opening)."""
+    if template.bottom_m is None or template.half_opening_m is None:
+        return False
+    ahead = SectionFit(V_GROOVE, centre, axis, template.half_opening_m)
+    return sees_past_end(points, tree, ahead, travel, params.half_width_m, template.bottom_m, params)
 
 
 def groove_template(points: np.ndarray, tree, fit: SectionFit, travel: np.ndarray, params: SectionParams):
@@ -216,7 +237,43 @@ def groove_template(points: np.ndarray, tree, fit: SectionFit, travel: np.ndarra
     u, w, _ = _profile_at(points, tree, fit.point_m, travel, *_frame(travel, fit.torch_axis), params)
     found = _surface_ends(u, w, fit.half_opening_m, fit.half_opening_m, params.groove_min_depth_m)
     ends = found[1] if found is not None else {}
-    return GrooveTemplate(-ends[-1] if -1 in ends else None, ends[1] if 1 in ends else None, fit.half_opening_m)
+    return GrooveTemplate(-ends[-1] if -1 in ends else None, ends[1] if 1 in ends else None, fit.half_opening_m,
+                          groove_bottom(points, tree, fit, travel, params))  # fmt: skip
+
+
+def groove_bottom(points: np.ndarray, tree, fit: SectionFit, travel: np.ndarray, params: SectionParams):
+    """How deep a groove fit's groove is (m below its surface line): the upper decile of the
+    depths of the points in its opening (|u| <= half-opening) within its slab; None with fewer
+    than PAST_END_POINTS points there (a fillet has no opening)."""
+    along, u, depth = _fit_offsets(points, tree, fit, travel, fit.point_m, params.half_width_m)
+    inside = (np.abs(u) <= fit.half_opening_m) & (np.abs(along) <= params.slab_m / 2)
+    return _upper_decile(depth[inside]) if np.count_nonzero(inside) >= PAST_END_POINTS else None
+
+
+def sees_past_end(
+    points: np.ndarray, tree, fit: SectionFit, travel: np.ndarray, reach_m: float, bottom_m: float,
+    params: SectionParams,
+) -> bool:
+    """Whether the scan sees past the part's end within `reach_m` ahead of a groove fit: at least
+    PAST_END_POINTS points ahead of its section (0 < along <= reach_m) and within its opening
+    (|u| <= half-opening) lie deeper than the groove's bottom `bottom_m` + PAST_END_MARGIN_M,
+    spread across at least half the opening's width. Through the opening of a groove that goes
+    on, the camera sees the groove (and through a root gap, what lies behind it along the seam
+    line only); past the plate's end it sees what lies behind it (the table, the floor); in a
+    hole it sees nothing."""
+    centre = fit.point_m + reach_m / 2 * travel
+    along, u, depth = _fit_offsets(points, tree, fit, travel, centre, reach_m / 2 + params.half_width_m)
+    ahead = (along > 0) & (along <= reach_m) & (np.abs(u) <= fit.half_opening_m)
+    beyond = ahead & (depth > bottom_m + PAST_END_MARGIN_M)
+    return np.count_nonzero(beyond) >= PAST_END_POINTS and np.ptp(u[beyond]) >= fit.half_opening_m
+
+
+def _fit_offsets(points, tree, fit: SectionFit, travel, centre, radius_m: float):
+    """(along, u, depth) (m) of the points within `radius_m` of `centre`, from the fit's seam
+    point: along `travel`, along its lateral and along its torch axis (into the work)."""
+    axis, lateral = _frame(travel, fit.torch_axis)
+    offsets = points[tree.query_ball_point(centre, radius_m)] - fit.point_m
+    return offsets @ travel, offsets @ lateral, offsets @ axis
 
 
 def _frame(travel: np.ndarray, axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -348,7 +405,7 @@ def _fit_groove(u: np.ndarray, w: np.ndarray, face_radius_m: float, min_depth_m:
 
 def bridge_groove(
     u: np.ndarray, w: np.ndarray, along: np.ndarray, template: GrooveTemplate, *, face_radius_m: float,
-    groove_min_depth_m: float,
+    groove_min_depth_m: float, part_ends: bool = False,
 ) -> _ProfileFit | None:
     """The groove in a profile where a dropout hides too much of it to fit (fit_profile found
     nothing), from where the plate surface ends on either side (_surface_ends), or None.
@@ -359,10 +416,10 @@ def bridge_groove(
     `template.right_m` right of the seam point. With both ends seen (each within 1.5 mm of
     where the template puts it, and agreeing on the seam point within 3 mm), the seam is the
     mean of the two the template implies. With one seen (and measured in the template: a side
-    never measured cannot place the seam), the other side must be a hole: no
-    points at all from 1.5 mm inside to 4 mm outside its expected end, and surface again
-    beyond (a plate's outer or oblique end is not a hole); the seam is then where the seen end
-    puts it.
+    never measured cannot place the seam), the other side must be a hole (_hole_beyond; a
+    plate's outer or oblique end is not a hole), or, where the caller found the part ending just
+    ahead (`part_ends`), the plate on that side must have ended while the groove's root is still
+    under the seam (_plate_ended); the seam is then where the seen end puts it.
     """
     left, right = template.expected(-1), template.expected(1)
     found = _surface_ends(u, w, left, right, groove_min_depth_m)
@@ -379,9 +436,8 @@ def bridge_groove(
         ((seen, centre_u),) = implied.items()
         hidden = -seen * (u - centre_u)
         expected = template.expected(-seen)
-        if np.any((hidden > expected - BRIDGE_MARGIN_M) & (hidden < expected + BRIDGE_HOLE_M)):
-            return None
-        if np.count_nonzero(surface & (hidden >= expected + BRIDGE_HOLE_M)) < 4:
+        if not (_hole_beyond(hidden, surface, expected)
+                or (part_ends and _plate_ended(u, w, hidden, surface, expected, centre_u, template))):
             return None
     else:
         return None
@@ -390,6 +446,30 @@ def bridge_groove(
     intercept, slope = _line(u[beside], w[beside]) if beside.sum() >= 6 else _line(u[surface], w[surface])
     norm = np.hypot(1.0, slope)
     return _ProfileFit(V_GROOVE, float(centre_u), intercept + slope * centre_u, slope / norm, -1.0 / norm, half_opening)
+
+
+def _hole_beyond(hidden, surface, expected_m: float) -> bool:
+    """Whether a groove's hidden side is a hole: no points from BRIDGE_MARGIN_M inside to
+    BRIDGE_HOLE_M outside its expected surface end, and surface again beyond."""
+    if np.any((hidden > expected_m - BRIDGE_MARGIN_M) & (hidden < expected_m + BRIDGE_HOLE_M)):
+        return False
+    return np.count_nonzero(surface & (hidden >= expected_m + BRIDGE_HOLE_M)) >= 4
+
+
+def _plate_ended(u, w, hidden, surface, expected_m: float, centre_u: float, template: GrooveTemplate) -> bool:
+    """Whether the plate on a groove's hidden side has ended (an end crossing the groove
+    obliquely) while the groove's root still lies under the seam: no surface point on that side
+    beyond BRIDGE_MARGIN_M inside its expected end, and at least 4 points within BRIDGE_MARGIN_M
+    of the seam line up to PAST_END_MARGIN_M above the groove's bottom, none counted below it
+    (past a square end, the table under a thin root face lies just below the root and must not
+    pass for it)."""
+    if template.bottom_m is None or np.any(surface & (hidden > expected_m - BRIDGE_MARGIN_M)):
+        return False
+    intercept, slope = _line(u[surface], w[surface])
+    depth = intercept + slope * u - w
+    root = (np.abs(u - centre_u) <= BRIDGE_MARGIN_M) & (depth >= template.bottom_m - PAST_END_MARGIN_M) & (
+        depth <= template.bottom_m)
+    return np.count_nonzero(root) >= 4
 
 
 def _surface_ends(u, w, left_m: float, right_m: float, groove_min_depth_m: float):

@@ -24,8 +24,10 @@ from weldseam.pipeline.section import (
     SectionParams,
     analyse_sections,
     fit_section,
+    groove_bottom,
     groove_template,
     section_frames,
+    sees_past_end,
 )
 
 PROBE_SECTIONS = 3
@@ -37,8 +39,9 @@ TANGENT_BASELINE_M = 0.032
 MIN_BEND_RADIUS_M = 0.03
 # The groove template a bridged section assumes: the median of this many latest fits.
 TEMPLATE_MEMORY = 6
-# Crossing a hole in the scan: the seam must fit this many times in a row beyond it, and the
-# seam line across it hold no more than HOLE_STRAYS points within HOLE_RADIUS_M (_across_hole).
+# Crossing a hole in the scan: the seam must fit this many times in a row beyond it (or up to the
+# part's end), and the seam line across it hold no more than HOLE_STRAYS points within
+# HOLE_RADIUS_M (_across_hole).
 HOLE_CONFIRM = 2
 HOLE_RADIUS_M = 0.0015
 HOLE_STRAYS = 2
@@ -316,15 +319,15 @@ def _end_templates(positions, axes, points, tree, joint, section_params) -> list
 
 
 def _median_template(templates: list[GrooveTemplate | None]) -> GrooveTemplate | None:
-    """Per side, and for the half-opening, the median of the latest TEMPLATE_MEMORY templates
-    that measured it (None for one measured in fewer than half of them); None when nothing
-    qualifies."""
+    """Per side, and for the half-opening and the bottom, the median of the latest
+    TEMPLATE_MEMORY templates that measured it (None for one measured in fewer than half of
+    them); None when nothing qualifies."""
     recent = templates[-TEMPLATE_MEMORY:]
     values = []
-    for name in ("left_m", "right_m", "half_opening_m"):
+    for name in ("left_m", "right_m", "half_opening_m", "bottom_m"):
         measured = [getattr(t, name) for t in recent if t is not None and getattr(t, name) is not None]
         values.append(float(np.median(measured)) if len(measured) >= max(2, len(recent) / 2) else None)
-    return GrooveTemplate(*values) if values != [None, None, None] else None
+    return GrooveTemplate(*values) if any(v is not None for v in values) else None
 
 
 def _next_fit(
@@ -352,11 +355,14 @@ def _across_hole(
 
     Sections are tried along the predicted curve (_ahead) from max_gap_m to max_hole_m ahead;
     the first that fits the joint within 25 % of its distance sideways and 5 % in depth must be
-    followed by HOLE_CONFIRM - 1 more fits in a row. The hole is bridged by a cubic Hermite
-    curve between the two ends and their travel directions (torch axes interpolated), and that
-    curve must be empty: no more than HOLE_STRAYS scan points within HOLE_RADIUS_M of it. For a
-    groove the seam point is the centre of the opening, in the air over the groove; where a
-    plate's surface crosses the line, the groove has ended, and one ahead is another seam."""
+    followed by HOLE_CONFIRM - 1 more fits in a row, or by the part's end (_part_ends_after): a
+    hole can reach to within a section or two of the plate's end, and the scan then sees past the
+    plate right after the fits (a stray fit inside a longer hole has nothing after it). The hole
+    is bridged by a cubic Hermite curve between the two ends and their travel directions (torch
+    axes interpolated), and that curve must be empty: no more than HOLE_STRAYS scan points within
+    HOLE_RADIUS_M of it. For a groove the seam point is the centre of the opening, in the air over
+    the groove; where a plate's surface crosses the line, the groove has ended, and one ahead is
+    another seam."""
     for distance in np.arange(max_gap_m + step_m, max_hole_m + step_m / 2, step_m):
         predicted, travel = _ahead(last_point, direction, bend, distance)
         fit, depth, sideways = _section_at(points, tree, predicted, travel, last_axis, section_params)
@@ -368,9 +374,14 @@ def _across_hole(
                                   joint=joint, step_m=step_m, max_gap_m=max_gap_m,
                                   section_params=section_params)  # fmt: skip
             if following is None:
-                return None
+                break
             run.append(following)
-        arrival = unit(run[-1].point_m - run[0].point_m)
+        if len(run) < HOLE_CONFIRM and not _part_ends_after(
+            run[-1], travel, last_point, last_axis, direction, points=points, tree=tree, reach_m=max_gap_m,
+            section_params=section_params,
+        ):
+            return None
+        arrival = unit(run[-1].point_m - run[0].point_m) if len(run) > 1 else travel
         line = _hermite(last_point, direction, fit.point_m, arrival, HOLE_RADIUS_M)
         if tree.query_ball_point(line, HOLE_RADIUS_M, return_length=True).sum() > HOLE_STRAYS:
             return None
@@ -379,6 +390,21 @@ def _across_hole(
         tilts = unit((1 - weights) * last_axis + weights * fit.torch_axis)
         return [SectionFit(joint, p, a, fit.half_opening_m, bridged=True) for p, a in zip(bridge, tilts)] + run
     return None
+
+
+def _part_ends_after(fit, travel, last_point, last_axis, direction, *, points, tree, reach_m, section_params) -> bool:
+    """Whether a groove's part ends within `reach_m` after `fit`, beyond a hole that began at
+    `last_point`: the scan sees past the part there (sees_past_end) deeper than the groove's
+    bottom, the deeper of its depths in the fit's section and in the section at `last_point`
+    (a section at a hole's edge may hold only part of the groove; a fit that is not the groove,
+    or not its whole depth, must not pass the groove going on for the part's end)."""
+    before = fit_section(points, tree, last_point, direction, last_axis, section_params)
+    if fit.joint != V_GROOVE or before.joint != V_GROOVE:
+        return False
+    bottoms = [groove_bottom(points, tree, f, t, section_params) for f, t in ((fit, travel), (before, direction))]
+    if None in bottoms:
+        return False
+    return sees_past_end(points, tree, fit, travel, reach_m, max(bottoms), section_params)
 
 
 def _hermite(start, start_direction, end, end_direction, spacing_m: float) -> np.ndarray:
