@@ -238,16 +238,21 @@ def groove_template(points: np.ndarray, tree, fit: SectionFit, travel: np.ndarra
     found = _surface_ends(u, w, fit.half_opening_m, fit.half_opening_m, params.groove_min_depth_m)
     ends = found[1] if found is not None else {}
     return GrooveTemplate(-ends[-1] if -1 in ends else None, ends[1] if 1 in ends else None, fit.half_opening_m,
-                          groove_bottom(points, tree, fit, travel, params))  # fmt: skip
+                          _bottom(u, w, fit.half_opening_m))  # fmt: skip
 
 
 def groove_bottom(points: np.ndarray, tree, fit: SectionFit, travel: np.ndarray, params: SectionParams):
-    """How deep a groove fit's groove is (m below its surface line): the upper decile of the
-    depths of the points in its opening (|u| <= half-opening) within its slab; None with fewer
-    than PAST_END_POINTS points there (a fillet has no opening)."""
-    along, u, depth = _fit_offsets(points, tree, fit, travel, fit.point_m, params.half_width_m)
-    inside = (np.abs(u) <= fit.half_opening_m) & (np.abs(along) <= params.slab_m / 2)
-    return _upper_decile(depth[inside]) if np.count_nonzero(inside) >= PAST_END_POINTS else None
+    """How deep a groove fit's groove is (m below its surface line), from its section (_bottom)."""
+    u, w, _ = _profile_at(points, tree, fit.point_m, travel, *_frame(travel, fit.torch_axis), params)
+    return _bottom(u, w, fit.half_opening_m)
+
+
+def _bottom(u: np.ndarray, w: np.ndarray, half_opening_m: float) -> float | None:
+    """The upper decile of the depths -w of a groove section's points in its opening
+    (|u| <= half-opening, u and w from its seam point); None with fewer than PAST_END_POINTS
+    points there (a fillet has no opening)."""
+    depth = -w[np.abs(u) <= half_opening_m]
+    return _upper_decile(depth) if len(depth) >= PAST_END_POINTS else None
 
 
 def sees_past_end(
