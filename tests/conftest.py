@@ -1,7 +1,18 @@
 """Shared analytic test geometry: clouds whose seam line is known exactly."""
 
+import signal
+
 import numpy as np
 import pytest
+
+
+def pytest_configure(config):
+    """Ctrl-C tests send SIGINT to child processes. A test run started in the background of a
+    non-interactive shell (`.ci/run &`) inherits SIGINT ignored, and an ignored signal stays
+    ignored in every child across exec, so those children could not be interrupted at all.
+    Handled here (as an interactive run has it), SIGINT reaches each child at its default."""
+    if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def v_groove_cloud(
