@@ -200,10 +200,9 @@ def plan_paths(
         # taken in chain order, as found.
         by_length = sorted(range(len(chains)), key=lambda k: -polyline_length(chains[k].points))
         pieces: dict[int, list[TracedSeam]] = {}
+        traced_so_far: list[TracedSeam] = []
         for k in by_length:
-            if inside_traced(
-                chains[k].points, [seam for found in pieces.values() for seam in found], c.section.face_radius_m / 2
-            ):
+            if inside_traced(chains[k].points, traced_so_far, c.section.face_radius_m / 2):
                 continue
             approx_axes = _approximate_torch_axes(
                 chains[k].points, working, normals, working_tree, c.section.face_radius_m
@@ -213,6 +212,7 @@ def plan_paths(
                 step_m=c.resample.spacing_m, max_gap_m=c.section.max_gap_m,
                 min_valid_fraction=c.section.min_valid_fraction, section_params=params,
             )
+            traced_so_far += pieces[k]
         traced = [seam for k in sorted(pieces) for seam in pieces[k]]
         seams = assemble_seams(
             traced, fine, fine_tree, support=support, support_tolerance_m=SUPPORT_TOLERANCE_M,

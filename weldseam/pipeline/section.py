@@ -266,19 +266,13 @@ def sees_past_end(
     on, the camera sees the groove (and through a root gap, what lies behind it along the seam
     line only); past the plate's end it sees what lies behind it (the table, the floor); in a
     hole it sees nothing."""
+    axis, lateral = _frame(travel, fit.torch_axis)
     centre = fit.point_m + reach_m / 2 * travel
-    along, u, depth = _fit_offsets(points, tree, fit, travel, centre, reach_m / 2 + params.half_width_m)
+    offsets = points[tree.query_ball_point(centre, reach_m / 2 + params.half_width_m)] - fit.point_m
+    along, u, depth = offsets @ travel, offsets @ lateral, offsets @ axis
     ahead = (along > 0) & (along <= reach_m) & (np.abs(u) <= fit.half_opening_m)
     beyond = ahead & (depth > bottom_m + PAST_END_MARGIN_M)
     return np.count_nonzero(beyond) >= PAST_END_POINTS and np.ptp(u[beyond]) >= fit.half_opening_m
-
-
-def _fit_offsets(points, tree, fit: SectionFit, travel, centre, radius_m: float):
-    """(along, u, depth) (m) of the points within `radius_m` of `centre`, from the fit's seam
-    point: along `travel`, along its lateral and along its torch axis (into the work)."""
-    axis, lateral = _frame(travel, fit.torch_axis)
-    offsets = points[tree.query_ball_point(centre, radius_m)] - fit.point_m
-    return offsets @ travel, offsets @ lateral, offsets @ axis
 
 
 def _frame(travel: np.ndarray, axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

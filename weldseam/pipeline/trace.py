@@ -398,8 +398,10 @@ def _part_ends_after(fit, travel, last_point, last_axis, direction, *, points, t
     bottom, the deeper of its depths in the fit's section and in the section at `last_point`
     (a section at a hole's edge may hold only part of the groove; a fit that is not the groove,
     or not its whole depth, must not pass the groove going on for the part's end)."""
+    if fit.joint != V_GROOVE:
+        return False
     before = fit_section(points, tree, last_point, direction, last_axis, section_params)
-    if fit.joint != V_GROOVE or before.joint != V_GROOVE:
+    if before.joint != V_GROOVE:
         return False
     bottoms = [groove_bottom(points, tree, f, t, section_params) for f, t in ((fit, travel), (before, direction))]
     if None in bottoms:
