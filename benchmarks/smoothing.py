@@ -25,7 +25,7 @@ from scipy.spatial import cKDTree
 from weldseam.config import PlanConfig
 from weldseam.pipeline.condition import condition_points, sparse_points
 from weldseam.pipeline.grid import voxel_centroids
-from weldseam.pipeline.neighbours import radius_graph
+from weldseam.pipeline.neighbours import radius_graph, radius_pairs
 from weldseam.pipeline.smooth import smooth_points
 from weldseam.synthetic.scenes import FAMILIES, make_scan
 
@@ -50,8 +50,8 @@ def working_cloud(points: np.ndarray) -> np.ndarray:
     """The (N, 3) cloud that `plan_paths` hands to its smooth stage."""
     c = CONFIG.condition
     working = voxel_centroids(condition_points(points, voxel_m=c.voxel_m), c.working_voxel_m)
-    graph = radius_graph(working, CONFIG.normals.radius_m)
-    return working[~sparse_points(graph, min_fraction=c.outlier_fraction)]
+    pairs = radius_pairs(working, CONFIG.normals.radius_m)
+    return working[~sparse_points(pairs, len(working), min_fraction=c.outlier_fraction)]
 
 
 def smoothers(knn: int) -> dict:

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy import sparse
 
 from weldseam.pipeline.grid import voxel_centroids
 
@@ -18,8 +17,9 @@ def condition_points(points: np.ndarray, *, voxel_m: float, crop_min_m=None, cro
     return voxel_centroids(kept, voxel_m)
 
 
-def sparse_points(graph: sparse.csr_matrix, *, min_fraction: float) -> np.ndarray:
-    """True for points with fewer neighbours (rows of `graph`) than `min_fraction` of the
-    median count: stray returns and the thin veils of flying pixels at depth edges."""
-    counts = np.diff(graph.indptr)
-    return counts < min_fraction * np.median(counts)
+def sparse_points(pairs: np.ndarray, count: int, *, min_fraction: float) -> np.ndarray:
+    """True for the points (of `count`) with fewer neighbours (in `pairs`, (M, 2) point indices
+    within a radius, each pair once) than `min_fraction` of the median count: stray returns
+    and the thin veils of flying pixels at depth edges."""
+    neighbours = np.bincount(pairs.ravel(), minlength=count) + 1
+    return neighbours < min_fraction * np.median(neighbours)

@@ -7,21 +7,40 @@ from scipy import sparse
 from scipy.spatial import cKDTree
 
 
+def radius_pairs(points: np.ndarray, radius_m: float) -> np.ndarray:
+    """Index pairs (M, 2) int32 of the points within `radius_m` of each other, each unordered
+    pair once (i < j), in the tree's traversal order (the same for the same input)."""
+    pairs = cKDTree(points, balanced_tree=False).query_pairs(radius_m, output_type="ndarray")
+    return pairs.astype(np.int32)
+
+
+def pairs_graph(pairs: np.ndarray, count: int) -> sparse.csr_matrix:
+    """Symmetric 0/1 matrix (count, count) with an entry (i, j) and (j, i) for each of `pairs`
+    (each unordered pair once) and each point with itself. Column indices within a row are in
+    the order of `pairs`, then the point itself."""
+    self_index = np.arange(count, dtype=np.int32)
+    rows = np.concatenate([pairs[:, 0], pairs[:, 1], self_index])
+    cols = np.concatenate([pairs[:, 1], pairs[:, 0], self_index])
+    graph = sparse.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(count, count))
+    # Each pair comes once, so there are no duplicates to sum: skipping that pass (and the
+    # per-row sort of column indices that comes with it) halves the build time.
+    graph.has_canonical_format = True
+    return graph.tocsr()
+
+
+def pairs_among(pairs: np.ndarray, kept: np.ndarray) -> np.ndarray:
+    """The pairs (M, 2) between points with `kept` (N,) true, in order, renumbered to index
+    the kept points only (points[kept])."""
+    index = np.cumsum(kept, dtype=np.int32) - 1
+    return index[pairs[kept[pairs[:, 0]] & kept[pairs[:, 1]]]]
+
+
 def radius_graph(points: np.ndarray, radius_m: float) -> sparse.csr_matrix:
     """Symmetric 0/1 matrix (N, N): entry (i, j) = 1 when |p_i - p_j| <= radius_m, self included.
 
     Column indices within a row are in no particular order (but the same for the same input).
     """
-    n = len(points)
-    pairs = cKDTree(points, balanced_tree=False).query_pairs(radius_m, output_type="ndarray")
-    self_index = np.arange(n)
-    rows = np.concatenate([pairs[:, 0], pairs[:, 1], self_index])
-    cols = np.concatenate([pairs[:, 1], pairs[:, 0], self_index])
-    graph = sparse.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
-    # query_pairs gives each pair once, so there are no duplicates to sum: skipping that pass (and
-    # the per-row sort of column indices that comes with it) halves the build time.
-    graph.has_canonical_format = True
-    return graph.tocsr()
+    return pairs_graph(radius_pairs(points, radius_m), len(points))
 
 
 def neighbour_mean(graph: sparse.csr_matrix, values: np.ndarray) -> np.ndarray:
@@ -62,28 +81,36 @@ def principal_directions(points: np.ndarray, graph: sparse.csr_matrix) -> np.nda
 
 def extreme_eigenvectors(cov: np.ndarray, largest: bool) -> np.ndarray:
     """Unit eigenvector (N, 3) of the largest or smallest eigenvalue of symmetric (N, 3, 3)
-    matrices, in closed form (vectorised; LAPACK's batched eigh is ~10x slower here).
+    matrices, in closed form (vectorised over the six distinct entries; LAPACK's batched eigh
+    is ~10x slower here).
 
     Eigenvalues by the trigonometric solution of the characteristic cubic; the eigenvector
     is the longest cross product of two rows of (A - lambda I), which are orthogonal to it.
     Isotropic matrices (no preferred direction) give the z axis.
     """
-    q = np.trace(cov, axis1=1, axis2=2) / 3
-    off = cov[:, 0, 1] ** 2 + cov[:, 0, 2] ** 2 + cov[:, 1, 2] ** 2
-    spread = np.sqrt(((cov[:, 0, 0] - q) ** 2 + (cov[:, 1, 1] - q) ** 2 + (cov[:, 2, 2] - q) ** 2 + 2 * off) / 6)
-    safe = np.where(spread > 0, spread, 1.0)
-    shifted = (cov - q[:, None, None] * np.eye(3)) / safe[:, None, None]
-    half_det = np.clip(np.linalg.det(shifted) / 2, -1.0, 1.0)
+    xx, yy, zz = cov[:, 0, 0], cov[:, 1, 1], cov[:, 2, 2]
+    xy, xz, yz = cov[:, 0, 1], cov[:, 0, 2], cov[:, 1, 2]
+    q = (xx + yy + zz) / 3
+    dx, dy, dz = xx - q, yy - q, zz - q
+    off = xy * xy + xz * xz + yz * yz
+    spread = np.sqrt((dx * dx + dy * dy + dz * dz + 2 * off) / 6)
+    # det(A - qI) / spread^3, halved: cos(3 phi) of the trigonometric solution.
+    det = dx * (dy * dz - yz * yz) - xy * (xy * dz - yz * xz) + xz * (xy * yz - dy * xz)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        half_det = np.clip(np.where(spread > 0, det / (2 * spread**3), 0.0), -1.0, 1.0)
     phi = np.arccos(half_det) / 3
     value = q + 2 * spread * (np.cos(phi) if largest else np.cos(phi + 2 * np.pi / 3))
-    rows = cov - value[:, None, None] * np.eye(3)
-    candidates = np.stack(
-        [np.cross(rows[:, 0], rows[:, 1]), np.cross(rows[:, 0], rows[:, 2]), np.cross(rows[:, 1], rows[:, 2])], axis=1
-    )
-    lengths = np.linalg.norm(candidates, axis=2)
+    a, b, c = xx - value, yy - value, zz - value  # the diagonal of A - lambda I
+    candidates = np.stack([
+        np.stack([xy * yz - xz * b, xz * xy - a * yz, a * b - xy * xy], axis=1),  # row 0 x row 1
+        np.stack([xy * c - xz * yz, xz * xz - a * c, a * yz - xy * xz], axis=1),  # row 0 x row 2
+        np.stack([b * c - yz * yz, yz * xz - xy * c, xy * yz - b * xz], axis=1),  # row 1 x row 2
+    ], axis=1)
+    lengths = np.sqrt(np.einsum("nkj,nkj->nk", candidates, candidates))
     best = np.argmax(lengths, axis=1)
-    vectors = candidates[np.arange(len(cov)), best]
-    norm = lengths[np.arange(len(cov)), best]
+    picked = np.arange(len(cov))
+    vectors = candidates[picked, best]
+    norm = lengths[picked, best]
     result = np.divide(vectors, norm[:, None], out=np.zeros_like(vectors), where=norm[:, None] > 0)
     result[norm <= 0] = (0.0, 0.0, 1.0)
     return result

@@ -25,7 +25,7 @@ from weldseam.pipeline.condition import condition_points, sparse_points
 from weldseam.pipeline.descriptor import gradient_descriptor
 from weldseam.pipeline.grid import voxel_centroids
 from weldseam.pipeline.merge import merge_frames
-from weldseam.pipeline.neighbours import radius_graph
+from weldseam.pipeline.neighbours import pairs_among, pairs_graph, radius_graph, radius_pairs
 from weldseam.pipeline.normals import estimate_normals
 from weldseam.pipeline.order import order_chains
 from weldseam.pipeline.pairing import pair_midpoints
@@ -107,8 +107,14 @@ def plan_paths(
             raise InputError(f"{scan.source}: only {len(fine)} valid points (finite, inside the crop box)")
         working = voxel_centroids(fine, c.condition.working_voxel_m)
         fine_tree = cKDTree(fine, balanced_tree=False)
+        # Isolated points go before any neighbourhood statistics; their pairs go with them.
+        pairs = radius_pairs(working, c.normals.radius_m)
+        outliers = sparse_points(pairs, len(working), min_fraction=c.condition.outlier_fraction)
+        if outliers.any():
+            pairs = pairs_among(pairs, ~outliers)
+            working = working[~outliers]
+        graphs = {c.normals.radius_m: pairs_graph(pairs, len(working))}
     emit("condition", fine)
-    graphs: dict[float, object] = {}
 
     def neighbourhoods(radius_m: float):
         """One radius graph per distinct radius: smoothing moves points by well under a
@@ -116,14 +122,6 @@ def plan_paths(
         if radius_m not in graphs:
             graphs[radius_m] = radius_graph(working, radius_m)
         return graphs[radius_m]
-
-    with stage("condition"):
-        # Isolated points go before any neighbourhood statistics; the graph is cut to match.
-        outliers = sparse_points(neighbourhoods(c.normals.radius_m), min_fraction=c.condition.outlier_fraction)
-        if outliers.any():
-            kept = ~outliers
-            graphs = {radius: graph[kept][:, kept] for radius, graph in graphs.items()}
-            working = working[kept]
 
     working_camera = camera
     if camera.shape not in ((3,), scan.points_m.shape):
