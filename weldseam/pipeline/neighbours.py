@@ -6,6 +6,8 @@ import numpy as np
 from scipy import sparse
 from scipy.spatial import cKDTree
 
+from weldseam.pipeline.parallel import graph_rows, map_row_blocks
+
 
 def radius_pairs(points: np.ndarray, radius_m: float) -> np.ndarray:
     """Index pairs (M, 2) int32 of the points within `radius_m` of each other, each unordered
@@ -44,9 +46,9 @@ def radius_graph(points: np.ndarray, radius_m: float) -> sparse.csr_matrix:
 
 
 def neighbour_mean(graph: sparse.csr_matrix, values: np.ndarray) -> np.ndarray:
-    """Mean of `values` (N,) or (N, k) over each point's neighbourhood (rows of `graph`)."""
-    counts = np.asarray(graph.sum(axis=1)).ravel()
-    sums = graph @ values
+    """Mean of `values` (N,) or (N, k) over each point's neighbourhood (rows of the 0/1 `graph`)."""
+    counts = np.diff(graph.indptr)
+    sums = map_row_blocks(lambda rows: graph_rows(graph, rows) @ values, graph.shape[0])
     return sums / (counts if sums.ndim == 1 else counts[:, None])
 
 
@@ -88,6 +90,10 @@ def extreme_eigenvectors(cov: np.ndarray, largest: bool) -> np.ndarray:
     is the longest cross product of two rows of (A - lambda I), which are orthogonal to it.
     Isotropic matrices (no preferred direction) give the z axis.
     """
+    return map_row_blocks(lambda rows: _extreme_eigenvectors(cov[rows], largest), len(cov))
+
+
+def _extreme_eigenvectors(cov: np.ndarray, largest: bool) -> np.ndarray:
     xx, yy, zz = cov[:, 0, 0], cov[:, 1, 1], cov[:, 2, 2]
     xy, xz, yz = cov[:, 0, 1], cov[:, 0, 2], cov[:, 1, 2]
     q = (xx + yy + zz) / 3

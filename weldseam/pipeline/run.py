@@ -29,6 +29,7 @@ from weldseam.pipeline.neighbours import pairs_among, pairs_graph, radius_graph,
 from weldseam.pipeline.normals import estimate_normals
 from weldseam.pipeline.order import order_chains
 from weldseam.pipeline.pairing import pair_midpoints
+from weldseam.pipeline.parallel import in_background
 from weldseam.pipeline.resample import resample_seam
 from weldseam.pipeline.section import section_params
 from weldseam.pipeline.segment import automatic_threshold, cluster_candidates
@@ -105,8 +106,9 @@ def plan_paths(
         )
         if len(fine) < MIN_POINTS:
             raise InputError(f"{scan.source}: only {len(fine)} valid points (finite, inside the crop box)")
+        # The sections' search tree over the fine cloud is built on the other core meanwhile.
+        fine_tree_building = in_background(cKDTree, fine, balanced_tree=False)
         working = voxel_centroids(fine, c.condition.working_voxel_m)
-        fine_tree = cKDTree(fine, balanced_tree=False)
         # Isolated points go before any neighbourhood statistics; their pairs go with them.
         pairs = radius_pairs(working, c.normals.radius_m)
         outliers = sparse_points(pairs, len(working), min_fraction=c.condition.outlier_fraction)
@@ -193,6 +195,7 @@ def plan_paths(
         with stage("order"):
             chains += order_chains(nodes, link_m=c.order.link_m, min_branch_m=c.order.min_branch_m)
     with stage("section"):
+        fine_tree = fine_tree_building.result()
         # Longest chains first; a chain within face_radius / 2 of the opening of a groove traced
         # before is skipped (fit_section takes that as the groove's reach). The pieces are then
         # taken in chain order, as found.
