@@ -4,7 +4,10 @@ from scipy.spatial import cKDTree
 from weldseam.config import SectionConfig
 from weldseam.geometry import polyline_length
 from weldseam.pipeline.section import section_params
-from weldseam.pipeline.trace import TracedSeam, extend_seam, inside_traced
+import pytest
+
+from weldseam.pipeline.parallel import worker_process
+from weldseam.pipeline.trace import TracedSeam, extend_seam, extend_seams, inside_traced
 
 RING_RADIUS_M = 0.05
 STEP_M = 0.002
@@ -216,3 +219,31 @@ def test_a_line_along_a_traced_grooves_edge_is_inside_it_and_a_line_beside_it_is
     past_the_end = np.vstack([edge_line, [0.11, 0.0085, 0.0]])
     assert not inside_traced(past_the_end, [seam], beside_m=0.006), "a line going on past the seam's end"
     assert not inside_traced(edge_line, [], beside_m=0.006)
+
+
+@pytest.mark.parametrize("with_worker", [False, True])
+def test_extending_the_ends_apart_gives_the_seams_extended_one_end_after_the_other(rng, with_worker):
+    """The ends of a loop's arc meet (one stops where the other's extension is, across a hole in
+    the gap), a second seam is shorter than the ends' look-back (extended one end after the
+    other) and a third is closed (left alone)."""
+    points = ring_groove_plate(rng)
+    gap = np.abs(np.arctan2(points[:, 1], points[:, 0]) + 0.4) < 0.15
+    points = points[~(gap & (np.abs(np.hypot(points[:, 0], points[:, 1]) - RING_RADIUS_M) < 0.03))]
+    tree = cKDTree(points)
+    closed = ring_arc(0.0, 2 * np.pi)
+    seams = [ring_arc(0.0, 1.5 * np.pi), ring_arc(0.5 * np.pi, 0.5 * np.pi + 0.5), TracedSeam(
+        closed.positions_m, closed.torch_axes, True, "v_groove", 1.0)]
+    options = dict(step_m=STEP_M, max_gap_m=0.012, max_extension_m=0.3, max_hole_m=0.05,
+                   section_params=SECTION_PARAMS)  # fmt: skip
+    one_after_the_other = [extend_seam(seam, points, tree, **options) for seam in seams]
+    if with_worker:
+        with worker_process(points, tree):
+            apart = extend_seams(seams, points, tree, **options)
+    else:
+        apart = extend_seams(seams, points, tree, **options)
+    assert one_after_the_other[0].holes, "the loop's ends meet across the hole"
+    assert len(one_after_the_other[1].positions_m) > len(seams[1].positions_m)
+    for serial, parallel in zip(one_after_the_other, apart):
+        assert serial.positions_m.tobytes() == parallel.positions_m.tobytes()
+        assert serial.torch_axes.tobytes() == parallel.torch_axes.tobytes()
+        assert serial.holes == parallel.holes and serial.closed == parallel.closed

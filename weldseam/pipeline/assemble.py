@@ -15,7 +15,7 @@ from scipy.spatial import cKDTree
 
 from weldseam.geometry import bend_corner, polyline_length, unit
 from weldseam.pipeline.section import FILLET, SectionParams
-from weldseam.pipeline.trace import END_BASELINE_M, Hole, TracedSeam, end_direction, extend_seam, seam_length
+from weldseam.pipeline.trace import END_BASELINE_M, Hole, TracedSeam, end_direction, extend_seams, seam_length
 
 
 def assemble_seams(
@@ -45,13 +45,10 @@ def assemble_seams(
         return trim_overlaps(joined, tolerance_m=overlap_m)
 
     seams = trimmed_and_joined(off_support(traced, support, support_tolerance_m))
-    extended = [
-        extend_seam(
-            seam, points, tree, step_m=step_m, max_gap_m=max_gap_m, max_extension_m=max_extension_m,
-            max_hole_m=max_hole_m, section_params=section_params,
-        )
-        for seam in seams
-    ]
+    extended = extend_seams(
+        seams, points, tree, step_m=step_m, max_gap_m=max_gap_m, max_extension_m=max_extension_m,
+        max_hole_m=max_hole_m, section_params=section_params,
+    )
     seams = trimmed_and_joined(extended)
     # Fragments that joined nothing are noise, and a piece too short to be a seam is no branch:
     # neither may split a real seam (it would be dropped after splitting it).

@@ -1,16 +1,24 @@
-"""Both cores for the per-point stages: numpy's array operations, scipy's sparse products and
-cKDTree release the GIL on large arrays, so threads run them side by side.
+"""Both cores.
 
-Row-wise work is cut into blocks of rows. Each row's result comes from the same operations in
-the same order whichever block holds it, so the output does not depend on the blocks or on
-the number of cores: it is byte-identical on every machine.
+Per-point stages: numpy's array operations, scipy's sparse products and cKDTree release the
+GIL on large arrays, so threads run them side by side. Row-wise work is cut into blocks of
+rows. Each row's result comes from the same operations in the same order whichever block
+holds it, so the output does not depend on the blocks or on the number of cores: it is
+byte-identical on every machine.
+
+Cross-sections: each is a few hundred points of small numpy calls, which hold the GIL, so a
+forked worker process (sharing the cloud and its search tree copy-on-write) fits half of each
+batch (map_shared). Each item's result is computed alone, so again nothing depends on who
+computed it.
 """
 
 from __future__ import annotations
 
+import multiprocessing
 import os
-from collections.abc import Callable
-from concurrent.futures import Future, ThreadPoolExecutor
+from collections.abc import Callable, Sequence
+from concurrent.futures import Future, ProcessPoolExecutor, ThreadPoolExecutor
+from contextlib import contextmanager
 
 import numpy as np
 from scipy import sparse
@@ -20,6 +28,10 @@ THREADS = 2
 MIN_BLOCK_ROWS = 10_000
 
 _pool: ThreadPoolExecutor | None = None
+# The forked worker and what it shares with this process (worker_process).
+_worker: ProcessPoolExecutor | None = None
+_shared: tuple = ()
+_worker_busy = False
 
 
 def _executor() -> ThreadPoolExecutor:
@@ -30,9 +42,9 @@ def _executor() -> ThreadPoolExecutor:
 
 
 def _forget_pool() -> None:
-    """A forked child has none of its parent's threads: it starts a pool of its own."""
-    global _pool
-    _pool = None
+    """A forked child has none of its parent's threads or worker: it starts its own."""
+    global _pool, _worker
+    _pool = _worker = None
 
 
 os.register_at_fork(after_in_child=_forget_pool)
@@ -71,3 +83,44 @@ def graph_rows(graph: sparse.csr_matrix, block: slice) -> sparse.csr_matrix:
         (graph.data[start:stop], graph.indices[start:stop], graph.indptr[block.start : block.stop + 1] - start),
         shape=(block.stop - block.start, graph.shape[1]),
     )
+
+
+@contextmanager
+def worker_process(*shared):
+    """While open, a forked worker process holds the objects `shared` (large arrays, a search
+    tree: never pickled) and map_shared hands it half of each batch. No worker on one core, or
+    inside a daemonic process (a multiprocessing pool's worker may not have children)."""
+    global _worker, _shared
+    if _worker is not None or (os.cpu_count() or 1) < 2 or multiprocessing.current_process().daemon:
+        yield
+        return
+    _shared = shared
+    _worker = ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("fork"))
+    try:
+        yield
+    finally:
+        worker, _worker, _shared = _worker, None, ()
+        worker.shutdown(wait=True, cancel_futures=True)
+
+
+def map_shared(func: Callable, shared: tuple, items: Sequence) -> list:
+    """[func(*shared, item) for item in items]; while a worker_process holds these very objects
+    `shared` and is idle, it computes the second half of the items (func and the items are
+    pickled). A map_shared inside func runs here: the worker is busy with the other half."""
+    global _worker_busy
+    if _worker is None or _worker_busy or len(items) < 2 or len(shared) != len(_shared) or any(
+        a is not b for a, b in zip(shared, _shared)
+    ):
+        return [func(*shared, item) for item in items]
+    half = (len(items) + 1) // 2
+    theirs = _worker.submit(_map_in_worker, func, list(items[half:]))
+    _worker_busy = True
+    try:
+        ours = [func(*shared, item) for item in items[:half]]
+        return ours + theirs.result()
+    finally:
+        _worker_busy = False
+
+
+def _map_in_worker(func: Callable, items: list) -> list:
+    return [func(*_shared, item) for item in items]

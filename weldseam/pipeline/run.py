@@ -29,14 +29,14 @@ from weldseam.pipeline.neighbours import pairs_among, pairs_graph, radius_graph,
 from weldseam.pipeline.normals import estimate_normals
 from weldseam.pipeline.order import order_chains
 from weldseam.pipeline.pairing import pair_midpoints
-from weldseam.pipeline.parallel import in_background
+from weldseam.pipeline.parallel import in_background, worker_process
 from weldseam.pipeline.resample import resample_seam
 from weldseam.pipeline.section import section_params
 from weldseam.pipeline.segment import automatic_threshold, cluster_candidates
 from weldseam.pipeline.smooth import smooth_points
 from weldseam.pipeline.support import find_support_plane
 from weldseam.pipeline.thinning import thin_points
-from weldseam.pipeline.trace import TracedSeam, inside_traced, trace_chain
+from weldseam.pipeline.trace import TracedSeam, inside_traced, probe_chains, trace_chain
 from weldseam.types import RunResult, Scan, WeldPath
 
 STAGES = (
@@ -194,22 +194,24 @@ def plan_paths(
             nodes = voxel_centroids(thinned, c.grid.leaf_m)
         with stage("order"):
             chains += order_chains(nodes, link_m=c.order.link_m, min_branch_m=c.order.min_branch_m)
-    with stage("section"):
-        fine_tree = fine_tree_building.result()
+    fine_tree = fine_tree_building.result()
+    with stage("section"), worker_process(fine, fine_tree):
         # Longest chains first; a chain within face_radius / 2 of the opening of a groove traced
         # before is skipped (fit_section takes that as the groove's reach). The pieces are then
         # taken in chain order, as found.
         by_length = sorted(range(len(chains)), key=lambda k: -polyline_length(chains[k].points))
+        approx_axes = [
+            _approximate_torch_axes(chain.points, working, normals, working_tree, c.section.face_radius_m)
+            for chain in chains
+        ]
+        probed = probe_chains(chains, approx_axes, fine, fine_tree, params)
         pieces: dict[int, list[TracedSeam]] = {}
         traced_so_far: list[TracedSeam] = []
         for k in by_length:
-            if inside_traced(chains[k].points, traced_so_far, c.section.face_radius_m / 2):
+            if not probed[k] or inside_traced(chains[k].points, traced_so_far, c.section.face_radius_m / 2):
                 continue
-            approx_axes = _approximate_torch_axes(
-                chains[k].points, working, normals, working_tree, c.section.face_radius_m
-            )
             pieces[k] = trace_chain(
-                chains[k], approx_axes, fine, fine_tree,
+                chains[k], approx_axes[k], fine, fine_tree,
                 step_m=c.resample.spacing_m, max_gap_m=c.section.max_gap_m,
                 min_valid_fraction=c.section.min_valid_fraction, section_params=params,
             )

@@ -24,11 +24,11 @@ import numpy as np
 
 from weldseam.config import SectionConfig
 from weldseam.geometry import unit
+from weldseam.pipeline.parallel import map_shared
 
 V_GROOVE = "v_groove"
 FILLET = "fillet"
 
-PARALLEL_QUERY_MIN = 64
 # Bridging a dropout: how far a surface end may sit from where the template expects it, and
 # how far past it a hole must reach.
 BRIDGE_MARGIN_M = 0.0015
@@ -167,17 +167,16 @@ def analyse_sections(
 
 
 def _fit_sections(points, tree, centres, travel, axes, lateral, params: SectionParams) -> list[SectionFit]:
-    """One fit per centre, in the frames given."""
-    # Threads pay off only for many centres; seam extension asks for one at a time. Neighbours
-    # come in the tree's traversal order, the same for the same cloud (sorting them costs a third
-    # of the query).
-    workers = -1 if len(centres) >= PARALLEL_QUERY_MIN else 1
-    neighbourhoods = tree.query_ball_point(centres, params.half_width_m, workers=workers, return_sorted=False)
-    fits = []
-    for centre, t, a, lat, members in zip(centres, travel, axes, lateral, neighbourhoods):
-        u, w, _ = _profile(points[members] - centre, t, a, lat, params)
-        fits.append(_to_3d(_fit_profile_with(params, u, w), centre, a, lat))
-    return fits
+    """One fit per centre, in the frames given (half of them on the worker process, if one is
+    running: parallel.worker_process)."""
+    return map_shared(_fit_one, (points, tree), [(*frame, params) for frame in zip(centres, travel, axes, lateral)])
+
+
+def _fit_one(points, tree, item) -> SectionFit:
+    """The section fit of one (centre, travel, axis, lateral, params)."""
+    centre, t, a, lat, params = item
+    u, w, _ = _profile_at(points, tree, centre, t, a, lat, params)
+    return _to_3d(_fit_profile_with(params, u, w), centre, a, lat)
 
 
 def _fit_profile_with(params: SectionParams, u: np.ndarray, w: np.ndarray) -> _ProfileFit | None:

@@ -29,6 +29,7 @@ from weldseam.pipeline.section import (
     section_frames,
     sees_past_end,
 )
+from weldseam.pipeline.parallel import map_shared
 
 PROBE_SECTIONS = 3
 END_BASELINE_M = 0.012
@@ -70,6 +71,21 @@ class TracedSeam:
     half_opening_m: float = 0.0
 
 
+def probe_chains(chains: list[Chain], approx_axes: list[np.ndarray], points, tree, section_params: SectionParams):
+    """For each chain, whether any of PROBE_SECTIONS evenly spaced sections along it fits a
+    joint: most candidate chains are plate or table edges, rejected this way without fitting
+    every section. All chains' probes are fitted in one batch (half on the worker process)."""
+    probes = []
+    for chain, axes in zip(chains, approx_axes):
+        travel, frame_axes, lateral = section_frames(chain.points, axes, chain.closed)
+        at = np.unique(np.linspace(0, len(chain.points) - 1, PROBE_SECTIONS).round().astype(int))
+        probes.append((chain.points[at], travel[at], frame_axes[at], lateral[at]))
+    if not probes:
+        return []
+    fits = iter(analyse_sections(points, tree, *(np.concatenate(part) for part in zip(*probes)), section_params))
+    return [any([next(fits).joint for _ in range(len(centres))]) for centres, *_ in probes]
+
+
 def trace_chain(
     chain: Chain,
     approx_axes: np.ndarray,
@@ -81,18 +97,9 @@ def trace_chain(
     min_valid_fraction: float,
     section_params: SectionParams,
 ) -> list[TracedSeam]:
-    """Seams found along one chain (none if the chain is not a seam).
-
-    Three evenly spaced sections are fitted first; when none of them fits a joint the
-    chain is rejected without fitting the rest (most candidates are plate or table edges).
-    """
+    """Seams found along one chain (none if the chain is not a seam): a section at every
+    chain point (probe_chains first rejects most chains that are not)."""
     travel, axes, lateral = section_frames(chain.points, approx_axes, chain.closed)
-    probes = np.unique(np.linspace(0, len(chain.points) - 1, PROBE_SECTIONS).round().astype(int))
-    probe_fits = analyse_sections(
-        points, tree, chain.points[probes], travel[probes], axes[probes], lateral[probes], section_params
-    )
-    if not any(fit.joint for fit in probe_fits):
-        return []
     fits = analyse_sections(points, tree, chain.points, travel, axes, lateral, section_params)
     kinds = Counter(fit.joint for fit in fits if fit.joint)
     if not kinds:
@@ -198,6 +205,39 @@ def _ahead(last_point, direction, bend, distance_m: float) -> tuple[np.ndarray, 
     return last_point + distance_m * direction + 0.5 * distance_m**2 * bend, unit(direction + distance_m * bend)
 
 
+def extend_seams(
+    seams: list[TracedSeam], points, tree, *, step_m: float, max_gap_m: float, max_extension_m: float,
+    max_hole_m: float, section_params: SectionParams,
+) -> list[TracedSeam]:
+    """extend_seam of every seam, the ends of all seams shared with the worker process
+    (parallel.map_shared). Each end of a seam longer than TANGENT_BASELINE_M (with at least
+    TEMPLATE_MEMORY points) is extended on its own: its prediction and templates look no
+    further back than that, so the other end's extension changes only where this one stops
+    (where it comes back to the seam), and that is applied afterwards (_meeting_stop). The
+    result is the same as extending one end after the other; a shorter seam is extended so."""
+    search = dict(step_m=step_m, max_gap_m=max_gap_m, max_extension_m=max_extension_m, max_hole_m=max_hole_m,
+                  section_params=section_params)  # fmt: skip
+    jobs = []
+    for k, seam in enumerate(seams):
+        if seam.closed or len(seam.positions_m) < 2:
+            continue
+        if len(seam.positions_m) >= TEMPLATE_MEMORY and polyline_length(seam.positions_m) > TANGENT_BASELINE_M:
+            jobs += [(k, seam, True, search), (k, seam, False, search)]
+        else:
+            jobs.append((k, seam, None, search))
+    done = map_shared(_extension_job, (points, tree), jobs)
+    result = list(seams)
+    for k, seam in enumerate(seams):
+        ends = [extension for (index, *_), extension in zip(jobs, done) if index == k]
+        if len(ends) == 2:
+            (start, start_stop), (end, end_stop) = ends
+            end, end_stop = _meeting_stop(end, end_stop, start, step_m)
+            result[k] = _extended(seam, start, start_stop, end, end_stop)
+        elif ends:
+            result[k] = ends[0]
+    return result
+
+
 def extend_seam(
     seam: TracedSeam, points, tree, *, step_m: float, max_gap_m: float, max_extension_m: float,
     max_hole_m: float, section_params: SectionParams,
@@ -224,62 +264,123 @@ def extend_seam(
     """
     if seam.closed or len(seam.positions_m) < 2:
         return seam
-    positions, axes = list(seam.positions_m), list(seam.torch_axes)
-    holes = list(seam.holes)
     search = dict(points=points, tree=tree, joint=seam.joint, step_m=step_m, max_gap_m=max_gap_m,
+                  max_extension_m=max_extension_m, max_hole_m=max_hole_m, section_params=section_params)  # fmt: skip
+    start, start_stop = _extend_end(seam.positions_m[::-1], seam.torch_axes[::-1], **search)
+    before = [f for step in start for f in step.fits][::-1]
+    end, end_stop = _extend_end(
+        np.array([f.point_m for f in before] + list(seam.positions_m)),
+        np.array([f.torch_axis for f in before] + list(seam.torch_axes)), **search,
+    )
+    return _extended(seam, start, start_stop, end, end_stop)
+
+
+@dataclass(frozen=True)
+class _Step:
+    """One step of an extension: the fits it adds (bridged ones first across a hole) and the
+    hole it crossed, if any."""
+
+    fits: list[SectionFit]
+    hole: Hole | None = None
+
+
+def _extension_job(points, tree, job) -> tuple[list[_Step], _Step | None] | TracedSeam:
+    """(steps, stop) of one end of a seam (at_start True or False), or the whole seam extended
+    (at_start None)."""
+    _, seam, at_start, search = job
+    if at_start is None:
+        return extend_seam(seam, points, tree, **search)
+    order = slice(None, None, -1) if at_start else slice(None)
+    return _extend_end(seam.positions_m[order], seam.torch_axes[order], points=points, tree=tree, joint=seam.joint,
+                       **search)  # fmt: skip
+
+
+def _meeting_stop(end: list[_Step], end_stop: _Step | None, start: list[_Step], step_m: float):
+    """(steps, stop) of an end extended on its own, cut where extending one end after the other
+    stops it: at its first step within two steps of the start's extension (a loop closing)."""
+    start_points = [f.point_m for step in start for f in step.fits]
+    if not start_points:
+        return end, end_stop
+    start_tree = cKDTree(start_points)
+    for k, step in enumerate(end):
+        if start_tree.query([f.point_m for f in step.fits])[0].min() <= 2 * step_m:
+            return end[:k], step
+    return end, end_stop
+
+
+def _extended(seam: TracedSeam, start: list[_Step], start_stop, end: list[_Step], end_stop) -> TracedSeam:
+    """The seam with the fits of its start's steps (reversed) before it and its end's after it;
+    its holes: its own, then those crossed by each end's steps and by the step that stopped it
+    (it came back to the seam: the path closes across that hole)."""
+    before = [f for step in start for f in step.fits][::-1]
+    after = [f for step in end for f in step.fits]
+    holes = [step.hole for steps, stop in ((start, start_stop), (end, end_stop)) for step in [*steps, stop]
+             if step is not None and step.hole is not None]  # fmt: skip
+    return TracedSeam(
+        np.array([f.point_m for f in before] + list(seam.positions_m) + [f.point_m for f in after]),
+        np.array([f.torch_axis for f in before] + list(seam.torch_axes) + [f.torch_axis for f in after]),
+        False, seam.joint, seam.confidence, (*seam.holes, *holes),
+    )
+
+
+def _extend_end(
+    seam_positions, seam_axes, *, points, tree, joint, step_m, max_gap_m, max_extension_m, max_hole_m,
+    section_params,
+) -> tuple[list[_Step], _Step | None]:
+    """The steps that extend a seam (points and axes in travel order) beyond its last point
+    (see extend_seam), and the step that stopped it where it came within two steps of the
+    seam away from this end (None if it stopped otherwise)."""
+    positions, axes = list(seam_positions), list(seam_axes)
+    search = dict(points=points, tree=tree, joint=joint, step_m=step_m, max_gap_m=max_gap_m,
                   section_params=section_params)  # fmt: skip
-    for at_start in (True, False):
-        if at_start:
-            positions.reverse()
-            axes.reverse()
-        # The seam away from this end: an extension that reaches it has gone round a loop.
-        arc = arc_lengths(np.array(positions))
-        elsewhere = np.array(positions)[arc < arc[-1] - 2 * END_BASELINE_M]
-        elsewhere_tree = cKDTree(elsewhere) if len(elsewhere) else None
-        face_start = 0  # where the seam's current face begins (after a turn over an edge)
-        direction, bend = end_curve(np.array(positions))
-        bridged = [False] * len(positions)
-        templates = _end_templates(np.array(positions), np.array(axes), points, tree, seam.joint, section_params)
-        for _ in range(int(max_extension_m / step_m)):
-            # Past bridged points the seam is predicted along the curve from the last fitted one;
-            # right after a fit, straight (a fit per 2 mm step re-aims it; the curvature of a
-            # noisy end is not worth following).
-            since = _arc_since_fit(positions, bridged)
-            heading, ahead_bend = unit(direction + since * bend), (bend if since > 0 else np.zeros(3))
-            fit = _next_fit(positions[-1], axes[-1], heading, ahead_bend, template=_median_template(templates),
-                            **search)  # fmt: skip
-            fits = [fit]
-            if fit is None:
-                turned = _turned_run(positions[-1], axes[-1], heading, **search)
-                if turned is not None:
-                    fits, travel = turned
-                    corner = bend_corner(positions[-1], heading, fits[0].point_m, -travel, max_gap_m + 3 * step_m)
-                    if corner is not None:  # the sections at the edge itself fail: put the real corner in
-                        fits.insert(0, SectionFit(seam.joint, corner, unit(axes[-1] + fits[0].torch_axis)))
-                    direction, bend = travel, np.zeros(3)
-                    face_start = len(positions) + (corner is not None)
-                else:
-                    fits = _across_hole(positions[-1], axes[-1], heading, bend, max_hole_m=max_hole_m, **search)
-                    if fits is None:
-                        break
-                    holes.append(_hole(positions[-1], fits))
-            if elsewhere_tree is not None and elsewhere_tree.query([f.point_m for f in fits])[0].min() <= 2 * step_m:
-                break
-            positions += [f.point_m for f in fits]
-            axes += [f.torch_axis for f in fits]
-            bridged += [f.bridged for f in fits]
-            if seam.joint == V_GROOVE:
-                templates += [groove_template(points, tree, f, direction, section_params)
-                              for f in fits if not f.bridged]  # fmt: skip
-            # Re-aim along this face (one 2 mm step alone is ~10 degrees noisy), by fitted sections
-            # only: a bridged point leans on one edge, and aiming by it would turn a small offset into a drift.
-            fitted = np.array(positions[face_start:])[~np.array(bridged[face_start:])]
-            if len(fitted) >= 3:
-                direction, bend = end_curve(fitted)
-        if at_start:
-            positions.reverse()
-            axes.reverse()
-    return TracedSeam(np.array(positions), np.array(axes), False, seam.joint, seam.confidence, tuple(holes))
+    # The seam away from this end: an extension that reaches it has gone round a loop.
+    arc = arc_lengths(np.array(positions))
+    elsewhere = np.array(positions)[arc < arc[-1] - 2 * END_BASELINE_M]
+    elsewhere_tree = cKDTree(elsewhere) if len(elsewhere) else None
+    face_start = 0  # where the seam's current face begins (after a turn over an edge)
+    direction, bend = end_curve(np.array(positions))
+    bridged = [False] * len(positions)
+    templates = _end_templates(np.array(positions), np.array(axes), points, tree, joint, section_params)
+    steps: list[_Step] = []
+    for _ in range(int(max_extension_m / step_m)):
+        # Past bridged points the seam is predicted along the curve from the last fitted one;
+        # right after a fit, straight (a fit per 2 mm step re-aims it; the curvature of a
+        # noisy end is not worth following).
+        since = _arc_since_fit(positions, bridged)
+        heading, ahead_bend = unit(direction + since * bend), (bend if since > 0 else np.zeros(3))
+        fit = _next_fit(positions[-1], axes[-1], heading, ahead_bend, template=_median_template(templates),
+                        **search)  # fmt: skip
+        fits, hole = [fit], None
+        if fit is None:
+            turned = _turned_run(positions[-1], axes[-1], heading, **search)
+            if turned is not None:
+                fits, travel = turned
+                corner = bend_corner(positions[-1], heading, fits[0].point_m, -travel, max_gap_m + 3 * step_m)
+                if corner is not None:  # the sections at the edge itself fail: put the real corner in
+                    fits.insert(0, SectionFit(joint, corner, unit(axes[-1] + fits[0].torch_axis)))
+                direction, bend = travel, np.zeros(3)
+                face_start = len(positions) + (corner is not None)
+            else:
+                fits = _across_hole(positions[-1], axes[-1], heading, bend, max_hole_m=max_hole_m, **search)
+                if fits is None:
+                    break
+                hole = _hole(positions[-1], fits)
+        step = _Step(fits, hole)
+        if elsewhere_tree is not None and elsewhere_tree.query([f.point_m for f in fits])[0].min() <= 2 * step_m:
+            return steps, step
+        steps.append(step)
+        positions += [f.point_m for f in fits]
+        axes += [f.torch_axis for f in fits]
+        bridged += [f.bridged for f in fits]
+        if joint == V_GROOVE:
+            templates += [groove_template(points, tree, f, direction, section_params)
+                          for f in fits if not f.bridged]  # fmt: skip
+        # Re-aim along this face (one 2 mm step alone is ~10 degrees noisy), by fitted sections
+        # only: a bridged point leans on one edge, and aiming by it would turn a small offset into a drift.
+        fitted = np.array(positions[face_start:])[~np.array(bridged[face_start:])]
+        if len(fitted) >= 3:
+            direction, bend = end_curve(fitted)
+    return steps, None
 
 
 def _hole(start: np.ndarray, fits: list[SectionFit]) -> Hole:
