@@ -1,12 +1,11 @@
 import numpy as np
+import pytest
 from scipy.spatial import cKDTree
 
 from weldseam.config import SectionConfig
 from weldseam.geometry import polyline_length
-from weldseam.pipeline.section import section_params
-import pytest
-
 from weldseam.pipeline.parallel import worker_process
+from weldseam.pipeline.section import section_params
 from weldseam.pipeline.trace import TracedSeam, extend_seam, extend_seams, inside_traced
 
 RING_RADIUS_M = 0.05
