@@ -6,6 +6,7 @@ import pytest
 
 from weldseam.pipeline import parallel
 from weldseam.pipeline.descriptor import gradient_descriptor
+from weldseam.pipeline.grid import voxel_centroids
 from weldseam.pipeline.neighbours import radius_graph
 from weldseam.pipeline.normals import pca_normals
 from weldseam.pipeline.smooth import smooth_points
@@ -39,6 +40,19 @@ def test_per_point_stages_are_byte_identical_in_one_or_several_blocks(monkeypatc
     assert len(parallel.row_blocks(len(points))) == 2
     for one, two in zip(single, _per_point_stages(points)):
         assert one.tobytes() == two.tobytes()
+
+
+def test_the_voxel_grid_is_byte_identical_in_one_or_several_key_ranges(monkeypatch, rng):
+    points = rng.normal(0, 0.02, (20000, 3))
+    monkeypatch.setattr(parallel, "MIN_BLOCK_ROWS", 1)
+    monkeypatch.setattr(parallel, "THREADS", 1)
+    single = voxel_centroids(points, 0.001)
+    monkeypatch.setattr(parallel, "THREADS", 2)
+    monkeypatch.setattr(parallel.os, "cpu_count", lambda: 2)
+    split = voxel_centroids(points, 0.001)
+    assert single.tobytes() == split.tobytes()
+    cells = np.unique(np.floor((points - points.min(axis=0)) / 0.001), axis=0)
+    assert len(single) == len(cells)
 
 
 def test_a_background_error_is_raised_where_the_result_is_taken():

@@ -4,18 +4,35 @@ from __future__ import annotations
 
 import numpy as np
 
+from weldseam.pipeline.parallel import row_blocks, run_parts
+
 
 def voxel_centroids(points: np.ndarray, leaf_m: float) -> np.ndarray:
     """Centroids (M, 3) of the points in each occupied voxel of edge `leaf_m`.
 
     Voxel keys are computed from the cloud's own minimum corner, so the output order
-    (ascending voxel key) is deterministic for a given input.
+    (ascending voxel key) is deterministic for a given input. The keys are cut into ranges
+    handled on both cores (parallel.run_parts); each voxel's sum runs over its points
+    in input order either way, so the result does not depend on the cut.
     """
     if len(points) == 0:
         return points.copy()
     cells = np.floor((points - points.min(axis=0)) / leaf_m).astype(np.int64)
     extent = cells.max(axis=0) + 1
     keys = (cells[:, 0] * extent[1] + cells[:, 1]) * extent[2] + cells[:, 2]
+    blocks = row_blocks(len(points))
+    if len(blocks) == 1:
+        return _centroids(points, keys)
+    # Key ranges holding about as many points as the row blocks (from a sample of the keys).
+    sample = np.sort(keys[:: max(1, len(keys) // 1000)])
+    bounds = [sample[len(sample) * block.start // len(points)] for block in blocks[1:]]
+    ranges = np.searchsorted(bounds, keys, side="right")
+    return np.concatenate(run_parts(lambda index: _centroids(points[ranges == index], keys[ranges == index]),
+                                    range(len(blocks))))  # fmt: skip
+
+
+def _centroids(points: np.ndarray, keys: np.ndarray) -> np.ndarray:
+    """Centroid of the points sharing each key, in ascending key order."""
     _, inverse, counts = np.unique(keys, return_inverse=True, return_counts=True)
-    sums = np.column_stack([np.bincount(inverse, weights=points[:, k]) for k in range(3)])
+    sums = np.column_stack([np.bincount(inverse, weights=points[:, k], minlength=len(counts)) for k in range(3)])
     return sums / counts[:, None]

@@ -62,12 +62,15 @@ def row_blocks(count: int) -> list[slice]:
     return [slice(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:])]
 
 
+def run_parts(func: Callable, parts: Sequence) -> list:
+    """[func(part) for part in parts], the first part on this thread and the others on the pool."""
+    others = [_executor().submit(func, part) for part in parts[1:]]
+    return [func(parts[0])] + [other.result() for other in others]
+
+
 def run_row_blocks(func: Callable[[slice], object], count: int) -> list:
-    """[func(block) for block in row_blocks(count)], the first block on this thread and the
-    others on the pool."""
-    blocks = row_blocks(count)
-    others = [_executor().submit(func, block) for block in blocks[1:]]
-    return [func(blocks[0])] + [other.result() for other in others]
+    """[func(block) for block in row_blocks(count)] (run_parts)."""
+    return run_parts(func, row_blocks(count))
 
 
 def map_row_blocks(func: Callable[[slice], np.ndarray], count: int) -> np.ndarray:
