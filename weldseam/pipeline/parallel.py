@@ -57,7 +57,11 @@ def in_background(func: Callable, *args, **kwargs) -> Future:
 
 def row_blocks(count: int) -> list[slice]:
     """Up to THREADS contiguous slices covering range(count), none under MIN_BLOCK_ROWS rows."""
-    parts = max(1, min(THREADS, count // MIN_BLOCK_ROWS, os.cpu_count() or 1))
+    parts = min(THREADS, count // MIN_BLOCK_ROWS)
+    if parts > 1:
+        parts = min(parts, os.cpu_count() or 1)
+    if parts <= 1:
+        return [slice(0, count)]
     bounds = np.linspace(0, count, parts + 1).round().astype(int)
     return [slice(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:])]
 
@@ -80,7 +84,10 @@ def map_row_blocks(func: Callable[[slice], np.ndarray], count: int) -> np.ndarra
 
 
 def graph_rows(graph: sparse.csr_matrix, block: slice) -> sparse.csr_matrix:
-    """Rows `block` of a CSR matrix as a CSR matrix sharing its index and data arrays."""
+    """Rows `block` of a CSR matrix as a CSR matrix sharing its index and data arrays (the
+    matrix itself when the block is all of it)."""
+    if block.start == 0 and block.stop == graph.shape[0]:
+        return graph
     start, stop = graph.indptr[block.start], graph.indptr[block.stop]
     return sparse.csr_matrix(
         (graph.data[start:stop], graph.indices[start:stop], graph.indptr[block.start : block.stop + 1] - start),
