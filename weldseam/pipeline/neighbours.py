@@ -34,7 +34,8 @@ def pairs_among(pairs: np.ndarray, kept: np.ndarray) -> np.ndarray:
     """The pairs (M, 2) between points with `kept` (N,) true, in order, renumbered to index
     the kept points only (points[kept])."""
     index = np.cumsum(kept, dtype=np.int32) - 1
-    return index[pairs[kept[pairs[:, 0]] & kept[pairs[:, 1]]]]
+    # take and compress: a third of the time of fancy and boolean indexing on millions of pairs.
+    return index.take(pairs.compress(kept.take(pairs[:, 0]) & kept.take(pairs[:, 1]), axis=0))
 
 
 def radius_graph(points: np.ndarray, radius_m: float) -> sparse.csr_matrix:
