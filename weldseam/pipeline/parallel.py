@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import signal
 from collections.abc import Callable, Sequence
 from concurrent.futures import Future, ProcessPoolExecutor, ThreadPoolExecutor
 from contextlib import contextmanager
@@ -105,12 +106,20 @@ def worker_process(*shared):
         yield
         return
     _shared = shared
-    _worker = ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("fork"))
+    _worker = ProcessPoolExecutor(
+        max_workers=1, mp_context=multiprocessing.get_context("fork"), initializer=_leave_interrupts_to_parent
+    )
     try:
         yield
     finally:
         worker, _worker, _shared = _worker, None, ()
         worker.shutdown(wait=True, cancel_futures=True)
+
+
+def _leave_interrupts_to_parent() -> None:
+    """Ctrl-C reaches the whole process group: the worker ignores it, and the parent, interrupted,
+    closes the worker (after its current batch) and reports the interrupt itself."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def map_shared(func: Callable, shared: tuple, items: Sequence) -> list:
