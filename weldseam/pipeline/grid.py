@@ -27,8 +27,12 @@ def voxel_centroids(points: np.ndarray, leaf_m: float) -> np.ndarray:
     sample = np.sort(keys[:: max(1, len(keys) // 1000)])
     bounds = [sample[len(sample) * block.start // len(points)] for block in blocks[1:]]
     ranges = np.searchsorted(bounds, keys, side="right")
-    return np.concatenate(run_parts(lambda index: _centroids(points[ranges == index], keys[ranges == index]),
-                                    range(len(blocks))))  # fmt: skip
+
+    def in_range(index: int) -> np.ndarray:
+        chosen = ranges == index
+        return _centroids(points[chosen], keys[chosen])
+
+    return np.concatenate(run_parts(in_range, range(len(blocks))))
 
 
 def _centroids(points: np.ndarray, keys: np.ndarray) -> np.ndarray:

@@ -194,37 +194,38 @@ def plan_paths(
             nodes = voxel_centroids(thinned, c.grid.leaf_m)
         with stage("order"):
             chains += order_chains(nodes, link_m=c.order.link_m, min_branch_m=c.order.min_branch_m)
-    fine_tree = fine_tree_building.result()
-    with stage("section"), worker_process(fine, fine_tree):
-        # Longest chains first; a chain within face_radius / 2 of the opening of a groove traced
-        # before is skipped (fit_section takes that as the groove's reach). The pieces are then
-        # taken in chain order, as found.
-        by_length = sorted(range(len(chains)), key=lambda k: -polyline_length(chains[k].points))
-        approx_axes = [
-            _approximate_torch_axes(chain.points, working, normals, working_tree, c.section.face_radius_m)
-            for chain in chains
-        ]
-        probed = probe_chains(chains, approx_axes, fine, fine_tree, params)
-        pieces: dict[int, list[TracedSeam]] = {}
-        traced_so_far: list[TracedSeam] = []
-        for k in by_length:
-            if not probed[k] or inside_traced(chains[k].points, traced_so_far, c.section.face_radius_m / 2):
-                continue
-            pieces[k] = trace_chain(
-                chains[k], approx_axes[k], fine, fine_tree,
+    with stage("section"):
+        fine_tree = fine_tree_building.result()
+        with worker_process(fine, fine_tree):
+            # Longest chains first; a chain within face_radius / 2 of the opening of a groove traced
+            # before is skipped (fit_section takes that as the groove's reach). The pieces are then
+            # taken in chain order, as found.
+            by_length = sorted(range(len(chains)), key=lambda k: -polyline_length(chains[k].points))
+            approx_axes = [
+                _approximate_torch_axes(chain.points, working, normals, working_tree, c.section.face_radius_m)
+                for chain in chains
+            ]
+            probed = probe_chains(chains, approx_axes, fine, fine_tree, params)
+            pieces: dict[int, list[TracedSeam]] = {}
+            traced_so_far: list[TracedSeam] = []
+            for k in by_length:
+                if not probed[k] or inside_traced(chains[k].points, traced_so_far, c.section.face_radius_m / 2):
+                    continue
+                pieces[k] = trace_chain(
+                    chains[k], approx_axes[k], fine, fine_tree,
+                    step_m=c.resample.spacing_m, max_gap_m=c.section.max_gap_m,
+                    min_valid_fraction=c.section.min_valid_fraction, section_params=params,
+                )
+                traced_so_far += pieces[k]
+            traced = [seam for k in sorted(pieces) for seam in pieces[k]]
+            seams = assemble_seams(
+                traced, fine, fine_tree, support=support, support_tolerance_m=SUPPORT_TOLERANCE_M,
+                overlap_m=c.order.overlap_m, join_m=c.order.join_m, max_turn_deg=c.order.max_join_turn_deg,
+                min_branch_m=c.order.min_branch_m, min_seam_length_m=c.segment.min_seam_length_m,
                 step_m=c.resample.spacing_m, max_gap_m=c.section.max_gap_m,
-                min_valid_fraction=c.section.min_valid_fraction, section_params=params,
+                max_extension_m=c.section.max_extension_m, max_hole_m=c.section.max_hole_m,
+                section_params=params,
             )
-            traced_so_far += pieces[k]
-        traced = [seam for k in sorted(pieces) for seam in pieces[k]]
-        seams = assemble_seams(
-            traced, fine, fine_tree, support=support, support_tolerance_m=SUPPORT_TOLERANCE_M,
-            overlap_m=c.order.overlap_m, join_m=c.order.join_m, max_turn_deg=c.order.max_join_turn_deg,
-            min_branch_m=c.order.min_branch_m, min_seam_length_m=c.segment.min_seam_length_m,
-            step_m=c.resample.spacing_m, max_gap_m=c.section.max_gap_m,
-            max_extension_m=c.section.max_extension_m, max_hole_m=c.section.max_hole_m,
-            section_params=params,
-        )
     paths = []
     with stage("resample"):
         for seam in seams:

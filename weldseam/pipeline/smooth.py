@@ -54,8 +54,8 @@ def smooth_points(
         exponent = distance_sq[pairs] * np.float32(1.0 / (2 * (radius_m / 2) ** 2))
         exponent += offsets[pairs] * offsets[pairs] * np.float32(1.0 / (2 * sigma**2))
         weights = np.exp(-exponent)
-        owner = np.repeat(np.arange(rows.stop - rows.start), per_row[rows])
         size = rows.stop - rows.start
+        owner = np.repeat(np.arange(size), per_row[rows])
         return np.bincount(owner, weights * offsets[pairs], size) / np.bincount(owner, weights, size)
 
     return points + normals * map_row_blocks(shift, len(points))[:, None]

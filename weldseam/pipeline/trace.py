@@ -17,6 +17,7 @@ from scipy.spatial import cKDTree
 
 from weldseam.geometry import arc_lengths, bend_corner, polyline_length, unit
 from weldseam.pipeline.order import Chain
+from weldseam.pipeline.parallel import map_shared
 from weldseam.pipeline.section import (
     V_GROOVE,
     GrooveTemplate,
@@ -29,7 +30,6 @@ from weldseam.pipeline.section import (
     section_frames,
     sees_past_end,
 )
-from weldseam.pipeline.parallel import map_shared
 
 PROBE_SECTIONS = 3
 END_BASELINE_M = 0.012
@@ -225,15 +225,16 @@ def extend_seams(
             jobs += [(k, seam, True, search), (k, seam, False, search)]
         else:
             jobs.append((k, seam, None, search))
-    done = map_shared(_extension_job, (points, tree), jobs)
+    done: dict[int, list] = {}
+    for (k, *_), extension in zip(jobs, map_shared(_extension_job, (points, tree), jobs)):
+        done.setdefault(k, []).append(extension)
     result = list(seams)
-    for k, seam in enumerate(seams):
-        ends = [extension for (index, *_), extension in zip(jobs, done) if index == k]
+    for k, ends in done.items():
         if len(ends) == 2:
             (start, start_stop), (end, end_stop) = ends
             end, end_stop = _meeting_stop(end, end_stop, start, step_m)
-            result[k] = _extended(seam, start, start_stop, end, end_stop)
-        elif ends:
+            result[k] = _extended(seams[k], start, start_stop, end, end_stop)
+        else:
             result[k] = ends[0]
     return result
 
@@ -267,7 +268,7 @@ def extend_seam(
     search = dict(points=points, tree=tree, joint=seam.joint, step_m=step_m, max_gap_m=max_gap_m,
                   max_extension_m=max_extension_m, max_hole_m=max_hole_m, section_params=section_params)  # fmt: skip
     start, start_stop = _extend_end(seam.positions_m[::-1], seam.torch_axes[::-1], **search)
-    before = [f for step in start for f in step.fits][::-1]
+    before = _fits(start)[::-1]
     end, end_stop = _extend_end(
         np.array([f.point_m for f in before] + list(seam.positions_m)),
         np.array([f.torch_axis for f in before] + list(seam.torch_axes)), **search,
@@ -284,6 +285,11 @@ class _Step:
     hole: Hole | None = None
 
 
+def _fits(steps: list[_Step]) -> list[SectionFit]:
+    """The fits of all `steps`, in order."""
+    return [fit for step in steps for fit in step.fits]
+
+
 def _extension_job(points, tree, job) -> tuple[list[_Step], _Step | None] | TracedSeam:
     """(steps, stop) of one end of a seam (at_start True or False), or the whole seam extended
     (at_start None)."""
@@ -298,10 +304,9 @@ def _extension_job(points, tree, job) -> tuple[list[_Step], _Step | None] | Trac
 def _meeting_stop(end: list[_Step], end_stop: _Step | None, start: list[_Step], step_m: float):
     """(steps, stop) of an end extended on its own, cut where extending one end after the other
     stops it: at its first step within two steps of the start's extension (a loop closing)."""
-    start_points = [f.point_m for step in start for f in step.fits]
-    if not start_points:
+    if not start:
         return end, end_stop
-    start_tree = cKDTree(start_points)
+    start_tree = cKDTree([f.point_m for f in _fits(start)])
     for k, step in enumerate(end):
         if start_tree.query([f.point_m for f in step.fits])[0].min() <= 2 * step_m:
             return end[:k], step
@@ -312,8 +317,7 @@ def _extended(seam: TracedSeam, start: list[_Step], start_stop, end: list[_Step]
     """The seam with the fits of its start's steps (reversed) before it and its end's after it;
     its holes: its own, then those crossed by each end's steps and by the step that stopped it
     (it came back to the seam: the path closes across that hole)."""
-    before = [f for step in start for f in step.fits][::-1]
-    after = [f for step in end for f in step.fits]
+    before, after = _fits(start)[::-1], _fits(end)
     holes = [step.hole for steps, stop in ((start, start_stop), (end, end_stop)) for step in [*steps, stop]
              if step is not None and step.hole is not None]  # fmt: skip
     return TracedSeam(
