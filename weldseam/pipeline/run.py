@@ -7,6 +7,7 @@ stage that fails is reported with that name.
 from __future__ import annotations
 
 import hashlib
+import itertools
 import time
 from collections.abc import Callable, Sequence
 from contextlib import contextmanager
@@ -201,10 +202,9 @@ def plan_paths(
             # before is skipped (fit_section takes that as the groove's reach). The pieces are then
             # taken in chain order, as found.
             by_length = sorted(range(len(chains)), key=lambda k: -polyline_length(chains[k].points))
-            approx_axes = [
-                _approximate_torch_axes(chain.points, working, normals, working_tree, c.section.face_radius_m)
-                for chain in chains
-            ]
+            approx_axes = _approximate_torch_axes(
+                [chain.points for chain in chains], normals, working_tree, c.section.face_radius_m
+            )
             probed = probe_chains(chains, approx_axes, fine, fine_tree, params)
             pieces: dict[int, list[TracedSeam]] = {}
             traced_so_far: list[TracedSeam] = []
@@ -332,10 +332,17 @@ def _distinct_rows(rows: np.ndarray) -> np.ndarray:
     return rows[changes]
 
 
-def _approximate_torch_axes(centres, points, normals, tree, radius_m) -> np.ndarray:
-    """Negated mean normal of the surface within `radius_m` of each centre: the plate normal
-    beside a groove, the bisector of the faces at a corner; pointing into the work."""
-    neighbourhoods = tree.query_ball_point(centres, radius_m, workers=-1)
-    axes = np.array([-normals[members].sum(axis=0) if members else np.zeros(3) for members in neighbourhoods])
-    return unit(axes)
-
+def _approximate_torch_axes(centres: list[np.ndarray], normals, tree, radius_m) -> list[np.ndarray]:
+    """For each (K, 3) array of `centres`, the negated mean normal of the surface within
+    `radius_m` of each centre: the plate normal beside a groove, the bisector of the faces at a
+    corner; pointing into the work. One search for all (each search starts its own threads)."""
+    if not centres:
+        return []
+    everywhere = np.concatenate(centres)
+    neighbourhoods = tree.query_ball_point(everywhere, radius_m, workers=-1)
+    counts = np.fromiter(map(len, neighbourhoods), np.intp, len(neighbourhoods))
+    members = np.fromiter(itertools.chain.from_iterable(neighbourhoods), np.intp, counts.sum())
+    owner = np.repeat(np.arange(len(everywhere)), counts)
+    # bincount adds each centre's normals in member order, as a sum over them would.
+    sums = np.column_stack([np.bincount(owner, normals[members, k], len(everywhere)) for k in range(3)])
+    return np.split(unit(-sums), np.cumsum([len(c) for c in centres])[:-1])
