@@ -91,6 +91,16 @@ def test_fillet_corner_and_bisector(rng):
     assert abs(fit.axis_u) < 0.05 and fit.axis_w < -0.99
 
 
+def test_a_fit_seeking_one_joint_finds_that_joint_only(rng):
+    corner_u, corner_w = profile(lambda u: np.abs(u - 0.002), rng)
+    groove_u, groove_w = profile(v_groove(0.004), rng)
+    assert fit_profile(corner_u, corner_w, **PARAMS, joint=FILLET) == fit_profile(corner_u, corner_w, **PARAMS)
+    assert fit_profile(corner_u, corner_w, **PARAMS, joint=V_GROOVE) is None
+    assert fit_profile(groove_u, groove_w, **PARAMS, joint=V_GROOVE) == fit_profile(groove_u, groove_w, **PARAMS)
+    found = fit_profile(groove_u, groove_w, **PARAMS, joint=FILLET)
+    assert found is None or found.joint == FILLET
+
+
 def test_a_step_a_convex_edge_and_a_plane_are_not_seams(rng):
     for shape in (lambda u: np.where(u > 0, 0.008, 0.0), lambda u: -np.abs(u), lambda u: 0 * u):
         u, w = profile(shape, rng)

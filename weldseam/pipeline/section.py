@@ -140,15 +140,17 @@ def analyse_sections(
     axes: np.ndarray,
     lateral: np.ndarray,
     params: SectionParams,
+    joint: str | None = None,
 ) -> list[SectionFit]:
-    """Fit every cross-section; `tree` is a cKDTree over the fine `points` (N, 3).
+    """Fit every cross-section; `tree` is a cKDTree over the fine `points` (N, 3). `joint`
+    (V_GROOVE or FILLET): the only joint sought (fit_profile); None: either.
 
     A groove fit far from its centre, or with a torch axis far from the frame's (a coarse line
     that runs along one groove wall), is fitted again in the frame it found: centred on its seam
     point, across the same travel, with its torch axis. The groove then sits in the middle of
     the window with its surface level, as the fit assumes. (A fillet's corner, where two
     fitted lines meet, does not depend on where the window sits.)"""
-    fits = _fit_sections(points, tree, centres, travel, axes, lateral, params)
+    fits = _fit_sections(points, tree, centres, travel, axes, lateral, params, joint)
     moved = [
         k for k, fit in enumerate(fits)
         if fit.joint == V_GROOVE
@@ -158,7 +160,7 @@ def analyse_sections(
         again_axes, again_lateral = zip(*(_frame(travel[k], fits[k].torch_axis) for k in moved))
         again = _fit_sections(
             points, tree, np.array([fits[k].point_m for k in moved]), travel[moved], np.array(again_axes),
-            np.array(again_lateral), params,
+            np.array(again_lateral), params, joint,
         )
         for k, fit in zip(moved, again):
             if fit.joint == fits[k].joint:
@@ -166,32 +168,34 @@ def analyse_sections(
     return fits
 
 
-def _fit_sections(points, tree, centres, travel, axes, lateral, params: SectionParams) -> list[SectionFit]:
+def _fit_sections(points, tree, centres, travel, axes, lateral, params: SectionParams, joint) -> list[SectionFit]:
     """One fit per centre, in the frames given (half of them on the worker process, if one is
     running: parallel.worker_process)."""
-    return map_shared(_fit_one, (points, tree), [(*frame, params) for frame in zip(centres, travel, axes, lateral)])
+    frames = zip(centres, travel, axes, lateral)
+    return map_shared(_fit_one, (points, tree), [(*frame, params, joint) for frame in frames])
 
 
 def _fit_one(points, tree, item) -> SectionFit:
-    """The section fit of one (centre, travel, axis, lateral, params)."""
-    centre, t, a, lat, params = item
+    """The section fit of one (centre, travel, axis, lateral, params, joint)."""
+    centre, t, a, lat, params, joint = item
     u, w, _ = _profile_at(points, tree, centre, t, a, lat, params)
-    return _to_3d(_fit_profile_with(params, u, w), centre, a, lat)
+    return _to_3d(_fit_profile_with(params, u, w, joint), centre, a, lat)
 
 
-def _fit_profile_with(params: SectionParams, u: np.ndarray, w: np.ndarray) -> _ProfileFit | None:
+def _fit_profile_with(params: SectionParams, u: np.ndarray, w: np.ndarray, joint: str | None) -> _ProfileFit | None:
     """fit_profile with the section parameters."""
     return fit_profile(
         u, w, face_radius_m=params.face_radius_m, groove_min_depth_m=params.groove_min_depth_m,
-        fillet_min_leg_m=params.fillet_min_leg_m,
+        fillet_min_leg_m=params.fillet_min_leg_m, joint=joint,
     )
 
 
 def fit_section(
     points: np.ndarray, tree, centre: np.ndarray, travel: np.ndarray, axis: np.ndarray, params: SectionParams,
-    template: GrooveTemplate | None = None,
+    template: GrooveTemplate | None = None, joint: str | None = None,
 ) -> SectionFit:
-    """The one section at `centre` (3,) across `travel`, `axis` made perpendicular to it.
+    """The one section at `centre` (3,) across `travel`, `axis` made perpendicular to it;
+    `joint`: the only joint sought (fit_profile).
 
     Where no groove fits and the sections before describe the groove (`template`), the section
     is fitted again within half the groove's opening + face_radius / 2 of the centre (where a
@@ -202,12 +206,12 @@ def fit_section(
     obliquely."""
     axis, lateral = _frame(travel, axis)
     u, w, along = _profile_at(points, tree, centre, travel, axis, lateral, params)
-    profile = _fit_profile_with(params, u, w)
+    profile = _fit_profile_with(params, u, w, joint)
     if template is None or (profile is not None and profile.joint == V_GROOVE):
         return _to_3d(profile, centre, axis, lateral)
     if template.half_opening_m is not None:
         near = np.abs(u) <= template.half_opening_m + params.face_radius_m / 2
-        profile = _fit_profile_with(params, u[near], w[near])
+        profile = _fit_profile_with(params, u[near], w[near], joint)
         if profile is not None and profile.joint == V_GROOVE:
             return _to_3d(profile, centre, axis, lateral)
     if not template.edges_seen:
@@ -315,14 +319,18 @@ def _to_3d(profile: _ProfileFit | None, centre, a, lat) -> SectionFit:
 
 
 def fit_profile(
-    u: np.ndarray, w: np.ndarray, *, face_radius_m: float, groove_min_depth_m: float, fillet_min_leg_m: float
+    u: np.ndarray, w: np.ndarray, *, face_radius_m: float, groove_min_depth_m: float, fillet_min_leg_m: float,
+    joint: str | None = None,
 ) -> _ProfileFit | None:
-    """The joint in one 2D profile (u lateral, w height out of the work), or None."""
+    """The joint in one 2D profile (u lateral, w height out of the work), or None: a V-groove,
+    else a fillet; only the one `joint` (V_GROOVE or FILLET) where the caller seeks that one
+    (the extension of a seam: a fit of the other kind would be rejected anyway)."""
     if len(u) < 12:
         return None
     order = np.argsort(u, kind="stable")
     u, w = u[order], w[order]
-    return _fit_groove(u, w, face_radius_m, groove_min_depth_m) or _fit_fillet(u, w, fillet_min_leg_m)
+    groove = _fit_groove(u, w, face_radius_m, groove_min_depth_m) if joint != FILLET else None
+    return groove or (_fit_fillet(u, w, fillet_min_leg_m) if joint != V_GROOVE else None)
 
 
 def _line(u: np.ndarray, w: np.ndarray) -> tuple[float, float]:

@@ -401,11 +401,11 @@ def _arc_since_fit(positions: list[np.ndarray], bridged: list[bool]) -> float:
     return float(polyline_length(np.array(positions[first:]))) if first < len(positions) - 1 else 0.0
 
 
-def _section_at(points, tree, predicted, travel, axis, section_params, template=None):
-    """(fit, depth, sideways) of the section at `predicted` (bridged with a template where it
-    does not fit); depth and sideways are the fit's offsets (m) from the prediction along and
-    across the axis."""
-    fit = fit_section(points, tree, predicted, travel, axis, section_params, template)
+def _section_at(points, tree, predicted, travel, axis, section_params, joint, template=None):
+    """(fit, depth, sideways) of the section at `predicted` seeking `joint` (bridged with a
+    template where it does not fit); depth and sideways are the fit's offsets (m) from the
+    prediction along and across the axis."""
+    fit = fit_section(points, tree, predicted, travel, axis, section_params, template, joint)
     axis = unit(axis - (axis @ travel) * travel)
     offset = fit.point_m - predicted
     depth = abs(offset @ axis)
@@ -418,7 +418,7 @@ def _end_templates(positions, axes, points, tree, joint, section_params) -> list
         return []
     tail = slice(max(0, len(positions) - TEMPLATE_MEMORY), len(positions))
     travel, tail_axes, lateral = section_frames(positions[tail], axes[tail], closed=False)
-    fits = analyse_sections(points, tree, positions[tail], travel, tail_axes, lateral, section_params)
+    fits = analyse_sections(points, tree, positions[tail], travel, tail_axes, lateral, section_params, V_GROOVE)
     return [groove_template(points, tree, fit, t, section_params)
             for fit, t in zip(fits, travel) if fit.joint == V_GROOVE]  # fmt: skip
 
@@ -444,7 +444,7 @@ def _next_fit(
     distance = step_m
     while distance <= max_gap_m:
         predicted, travel = _ahead(last_point, direction, bend, distance)
-        fit, depth, sideways = _section_at(points, tree, predicted, travel, last_axis, section_params, template)
+        fit, depth, sideways = _section_at(points, tree, predicted, travel, last_axis, section_params, joint, template)
         near = sideways <= max(1.5 * step_m, 0.15 * distance) and depth <= max(0.5 * step_m, 0.2 * distance)
         if fit.joint == joint and near:
             return fit
@@ -470,7 +470,7 @@ def _across_hole(
     another seam."""
     for distance in np.arange(max_gap_m + step_m, max_hole_m + step_m / 2, step_m):
         predicted, travel = _ahead(last_point, direction, bend, distance)
-        fit, depth, sideways = _section_at(points, tree, predicted, travel, last_axis, section_params)
+        fit, depth, sideways = _section_at(points, tree, predicted, travel, last_axis, section_params, joint)
         if fit.joint != joint or sideways > 0.25 * distance or depth > max(0.5 * step_m, 0.05 * distance):
             continue
         run = [fit]
@@ -505,7 +505,7 @@ def _part_ends_after(fit, travel, last_point, last_axis, direction, *, points, t
     or not its whole depth, must not pass the groove going on for the part's end)."""
     if fit.joint != V_GROOVE:
         return False
-    before = fit_section(points, tree, last_point, direction, last_axis, section_params)
+    before = fit_section(points, tree, last_point, direction, last_axis, section_params, joint=V_GROOVE)
     if before.joint != V_GROOVE:
         return False
     bottoms = [groove_bottom(points, tree, f, t, section_params) for f, t in ((fit, travel), (before, direction))]
@@ -542,7 +542,7 @@ def _turned_run(last_point, last_axis, direction, *, points, tree, joint, step_m
         for edge in np.arange(0.0, max_gap_m + step_m, 2 * step_m):
             corner = last_point + edge * direction
             fit, depth, sideways = _section_at(points, tree, corner + 3 * step_m * travel, travel, new_axis,
-                                               section_params)  # fmt: skip
+                                               section_params, joint)  # fmt: skip
             if fit.joint != joint or sideways > 1.5 * step_m or depth > step_m:
                 continue
             run = [fit]
