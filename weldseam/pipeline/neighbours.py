@@ -6,12 +6,38 @@ import numpy as np
 from scipy import sparse
 from scipy.spatial import cKDTree
 
-from weldseam.pipeline.parallel import graph_rows, map_row_blocks
+from weldseam.pipeline.parallel import MIN_BLOCK_ROWS, graph_rows, map_row_blocks, run_parts
+
+# Clouds this large are searched for pairs on both cores (radius_pairs).
+SPLIT_MIN_POINTS = 2 * MIN_BLOCK_ROWS
 
 
 def radius_pairs(points: np.ndarray, radius_m: float) -> np.ndarray:
     """Index pairs (M, 2) int32 of the points within `radius_m` of each other, each unordered
-    pair once (i < j), in the tree's traversal order (the same for the same input)."""
+    pair once (i < j), in an order fixed by the points (the same for the same input).
+
+    A cloud of SPLIT_MIN_POINTS or more is cut across its longest axis at the median, and the
+    search runs on both cores (cKDTree releases the GIL): the pairs within each half, each on
+    its own thread, then those across the cut, among the points within radius_m of it. The cut
+    depends on the points alone, so the pairs come in the same order on any machine.
+    """
+    if len(points) < SPLIT_MIN_POINTS:
+        return _pairs_within(points, radius_m)
+    along = points[:, int(np.argmax(np.ptp(points, axis=0)))]
+    cut = np.median(along)
+    below, above = np.flatnonzero(along < cut), np.flatnonzero(along >= cut)
+    within = run_parts(lambda half: half.astype(np.int32)[_pairs_within(points[half], radius_m)], [below, above])
+    # A pair across the cut lies within radius_m of it on both sides.
+    near_below, near_above = below[along[below] >= cut - radius_m], above[along[above] <= cut + radius_m]
+    across = cKDTree(points[near_below], balanced_tree=False).sparse_distance_matrix(
+        cKDTree(points[near_above], balanced_tree=False), radius_m, output_type="ndarray"
+    )
+    ends = np.column_stack([near_below[across["i"]], near_above[across["j"]]]).astype(np.int32)
+    return np.concatenate([*within, np.sort(ends, axis=1)])
+
+
+def _pairs_within(points: np.ndarray, radius_m: float) -> np.ndarray:
+    """radius_pairs by one search, in the tree's traversal order."""
     pairs = cKDTree(points, balanced_tree=False).query_pairs(radius_m, output_type="ndarray")
     return pairs.astype(np.int32)
 
