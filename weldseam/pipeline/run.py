@@ -48,6 +48,9 @@ MIN_POINTS = 100
 SUPPORT_TOLERANCE_M = 0.002  # how far a point may lie from the table plane and be on it
 SUPPORT_BELOW_FRACTION = 0.05  # share of points allowed beyond the table (noise, outliers)
 ORIGIN_SAMPLE = 200_000  # scan points searched for the camera that saw each working point
+# The fine tree answers the sections' 25 mm balls (~2000 points each): with big leaves and
+# uncompacted nodes it is built in 33 ms instead of 58 and answers 600 balls in 107 ms, not 125.
+FINE_TREE_LEAF_SIZE = 128
 
 Dump = Callable[[str, np.ndarray, np.ndarray | None], None]
 
@@ -108,7 +111,9 @@ def plan_paths(
         if len(fine) < MIN_POINTS:
             raise InputError(f"{scan.source}: only {len(fine)} valid points (finite, inside the crop box)")
         # The sections' search tree over the fine cloud is built on the other core meanwhile.
-        fine_tree_building = in_background(cKDTree, fine, balanced_tree=False)
+        fine_tree_building = in_background(
+            cKDTree, fine, balanced_tree=False, compact_nodes=False, leafsize=FINE_TREE_LEAF_SIZE
+        )
         working = voxel_centroids(fine, c.condition.working_voxel_m)
         # Isolated points go before any neighbourhood statistics; their pairs go with them.
         pairs = radius_pairs(working, c.normals.radius_m)
