@@ -4,26 +4,43 @@ from weldseam.pipeline import thinning
 from weldseam.pipeline.thinning import thin_points
 
 
+def band(rng, count=800, centre_y=0.0):
+    x = rng.uniform(0.0, 0.1, count)
+    return np.column_stack([x, centre_y + rng.uniform(-0.002, 0.002, count), rng.uniform(-0.001, 0.001, count)])
+
+
 def test_a_scattered_band_contracts_onto_its_centre_line(rng):
-    x = rng.uniform(0.0, 0.1, 800)
-    band = np.column_stack([x, rng.uniform(-0.002, 0.002, 800), rng.uniform(-0.001, 0.001, 800)])
-    thinned = thin_points(band, radius_m=0.005, iterations=20)
+    (thinned,) = thin_points([band(rng)], radius_m=0.005, iterations=20)
     # Away from the ends, whose neighbourhoods are one-sided.
     inner = thinned[(thinned[:, 0] > 0.01) & (thinned[:, 0] < 0.09)]
     assert len(inner) > 500
     assert np.abs(inner[:, 1:]).max() < 0.0003 and np.ptp(inner[:, 0]) > 0.075  # across only, not along
 
 
-def test_thinning_stops_once_the_points_have_settled(monkeypatch):
-    graphs = []
-    counting = thinning.radius_graph
+def test_sets_thinned_together_are_each_thinned_as_alone(rng):
+    # Two bands 4 mm apart, closer than the radius: as one set they would merge into one line.
+    near, far = band(rng, centre_y=0.0), band(rng, centre_y=0.004)
+    together = thin_points([near, far, np.zeros((0, 3))], radius_m=0.005, iterations=20)
+    alone = [thin_points([points], radius_m=0.005, iterations=20)[0] for points in (near, far)]
+    assert len(together) == 3 and len(together[2]) == 0
+    for joint, single, centre_y in zip(together, alone, (0.0, 0.004)):
+        assert joint.shape == single.shape and np.allclose(joint, single, rtol=0, atol=1e-12)
+        inner = joint[(joint[:, 0] > 0.01) & (joint[:, 0] < 0.09)]
+        assert np.abs(inner[:, 1] - centre_y).max() < 0.0003
+
+
+def test_thinning_stops_once_the_points_have_settled(rng, monkeypatch):
+    searched = []
+    counting = thinning.radius_pairs
 
     def counted(points, radius_m):
-        graphs.append(len(points))
+        searched.append(len(points))
         return counting(points, radius_m)
 
-    monkeypatch.setattr(thinning, "radius_graph", counted)
+    monkeypatch.setattr(thinning, "radius_pairs", counted)
     line = np.column_stack([np.arange(0.0, 0.05, 0.001), np.zeros(50), np.zeros(50)])
-    thinned = thin_points(line, radius_m=0.005, iterations=20)
-    assert np.abs(thinned - line).max() < 1e-9
-    assert len(graphs) == 2  # the neighbour count, then one iteration that moves nothing
+    scattered = band(rng, count=300, centre_y=0.05)
+    thinned_line, thinned_band = thin_points([line, scattered], radius_m=0.005, iterations=20)
+    assert np.abs(thinned_line - line).max() < 1e-9 and np.abs(thinned_band - scattered).max() > 1e-4
+    # The neighbour count and one iteration that moves nothing search the line; the band goes on.
+    assert searched.count(len(line)) == 2 and len(searched) > 4

@@ -171,7 +171,7 @@ def plan_paths(
     working_tree = cKDTree(working)
 
     params = section_params(c.section, c.condition.voxel_m)
-    chains = []
+    centre_points = []  # per candidate, the points thinned onto its centre line
     for members in clusters:
         in_cluster = np.zeros(len(working), dtype=bool)
         in_cluster[members] = True
@@ -193,8 +193,11 @@ def plan_paths(
             if len(midpoints) < 5:  # no rim pairs (a narrow band): thin the band itself
                 midpoints = band
         emit("pairing", midpoints)
-        with stage("thinning"):
-            thinned = thin_points(midpoints, radius_m=c.thinning.radius_m, iterations=c.thinning.iterations)
+        centre_points.append(midpoints)
+    with stage("thinning"):  # all candidates at once: see thin_points
+        centre_points = thin_points(centre_points, radius_m=c.thinning.radius_m, iterations=c.thinning.iterations)
+    chains = []
+    for thinned in centre_points:
         emit("thinning", thinned)
         with stage("grid"):
             nodes = voxel_centroids(thinned, c.grid.leaf_m)

@@ -4,28 +4,51 @@ from __future__ import annotations
 
 import numpy as np
 
-from weldseam.pipeline.neighbours import neighbour_mean, principal_directions, radius_graph
+from weldseam.pipeline.neighbours import neighbour_mean, pairs_graph, principal_directions, radius_pairs
 
 # Thinning stops once no point moves more than this in an iteration (a hundredth of the fine voxel).
 SETTLED_M = 1e-5
 
 
-def thin_points(points: np.ndarray, *, radius_m: float, iterations: int) -> np.ndarray:
-    """Move every point toward the centroid of its neighbours within `radius_m`, across the
-    line only: the step's component along the local principal direction is removed, so the
-    points gather on the centre line without clumping into blobs along it. Repeated
-    `iterations` times, or until no point moves more than SETTLED_M. Points with at most two
-    neighbours at the start are isolated noise and dropped."""
-    counts = np.diff(radius_graph(points, radius_m).indptr) - 1
-    thinned = points[counts > 2]
+def thin_points(point_sets: list[np.ndarray], *, radius_m: float, iterations: int) -> list[np.ndarray]:
+    """Each (N, 3) set of `point_sets` thinned on its own: every point moves toward the centroid
+    of its neighbours within `radius_m` in its set, across the line only: the step's component
+    along the local principal direction is removed, so the points gather on the centre line
+    without clumping into blobs along it. Repeated `iterations` times, or until no point of the
+    set moves more than SETTLED_M. Points with at most two neighbours at the start are isolated
+    noise and dropped.
+
+    The sets (one per seam candidate, often dozens of a few hundred points) are thinned together:
+    one neighbourhood graph over all of them, with no edge between sets, and one solve per
+    iteration (per set, the fixed cost of twenty small solves would dominate).
+    """
+    counts = np.diff(_graph(point_sets, radius_m).indptr) - 1
+    kept = np.split(counts > 2, np.cumsum([len(points) for points in point_sets])[:-1])
+    thinned = [points[keep] for points, keep in zip(point_sets, kept)]
+    moving = [k for k, points in enumerate(thinned) if len(points)]
     for _ in range(iterations):
-        if len(thinned) == 0:
+        if not moving:
             break
-        graph = radius_graph(thinned, radius_m)
-        step = neighbour_mean(graph, thinned) - thinned
-        tangent = principal_directions(thinned, graph)
+        sets = [thinned[k] for k in moving]
+        sizes = [len(points) for points in sets]
+        points = np.concatenate(sets)
+        # Each set about its own mean: the covariances then lose no digits to the sets' distance.
+        local = points - np.repeat([points.mean(axis=0) for points in sets], sizes, axis=0)
+        graph = _graph(sets, radius_m)
+        step = neighbour_mean(graph, local) - local
+        tangent = principal_directions(local, graph)
         move = step - np.sum(step * tangent, axis=1, keepdims=True) * tangent
-        thinned = thinned + move
-        if np.max(np.abs(move)) <= SETTLED_M:
-            break
+        starts = np.cumsum([0] + sizes[:-1])
+        largest = np.maximum.reduceat(np.abs(move).max(axis=1), starts)
+        for k, moved in zip(moving, np.split(points + move, starts[1:])):
+            thinned[k] = moved
+        moving = [k for k, largest_move in zip(moving, largest) if largest_move > SETTLED_M]
     return thinned
+
+
+def _graph(point_sets: list[np.ndarray], radius_m: float):
+    """pairs_graph over all the sets' points (concatenated), with the pairs within each set only."""
+    starts = np.cumsum([0] + [len(points) for points in point_sets])
+    pairs = [radius_pairs(points, radius_m) + np.int32(start) for points, start in zip(point_sets, starts)
+             if len(points) > 1]  # fmt: skip
+    return pairs_graph(np.concatenate(pairs) if pairs else np.empty((0, 2), np.int32), int(starts[-1]))
