@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from weldseam.pipeline.pairing import pair_midpoints
+from weldseam.pipeline.pairing import _first_spanning, pair_midpoints
 
 PARAMS = dict(tangent_radius_m=0.006, angle_tolerance_deg=10.0, max_width_m=0.06, width_tolerance=0.25)
 
@@ -41,3 +41,18 @@ def test_rims_facing_each_other_across_a_gap_in_the_cluster_do_not_pair():
     midpoints, _ = pair_midpoints(rim, **PARAMS, in_band=in_band)
     centres = np.round(midpoints[:, 1], 6)
     assert set(np.unique(centres)) == {0.0, 0.032}
+
+
+def test_a_rim_point_pairs_with_its_nearest_candidate_that_spans_the_band():
+    # Rim points on a line at x = 0..9; point 0's candidates are 1..8 (nearest first), point 9's
+    # only candidate is 8, and point 4's only candidate is 9.
+    rim = np.column_stack([np.arange(10.0), np.zeros(10), np.zeros(10)])
+    rows, cols = np.array([0] * 8 + [4, 9]), np.array([1, 2, 3, 4, 5, 6, 7, 8, 9, 8])
+    starts = np.array([0, 8, 9])
+
+    def in_band(points: np.ndarray) -> np.ndarray:
+        # Point 0's samples at 1/4 of the way to a candidate c lie at c / 4: in the band from c = 5.
+        return (points[:, 0] >= 1.2) & (points[:, 0] <= 8.6)
+
+    partner = _first_spanning(rim, rows, cols, starts, in_band)
+    assert cols[partner].tolist() == [5, 9]  # 0 -> 5 (1, 2, 3 and 4 fail); 9 -> 8 fails (sample at 8.75)

@@ -58,16 +58,16 @@ def pair_midpoints(
         across &= np.abs(along) / np.maximum(length, 1e-12) <= np.sin(np.radians(angle_tolerance_deg))
     first, second, length = first[across], second[across], length[across]
     rows, cols, length = np.concatenate([first, second]), np.concatenate([second, first]), np.concatenate([length] * 2)
-    if in_band is not None and len(rows):
-        fractions = np.array([0.25, 0.5, 0.75])[:, None, None]
-        samples = rim[rows][None] + fractions * (rim[cols] - rim[rows])[None]
-        spans = in_band(samples.reshape(-1, 3)).reshape(len(fractions), -1).all(axis=0)
-        rows, cols, length = rows[spans], cols[spans], length[spans]
     if len(rows) == 0:
         return np.empty((0, 3)), np.empty(0)
+    # Each rim point's candidates, nearest first; its partner is the first that spans the band.
     order = np.lexsort((length, rows))
-    first = order[np.r_[True, rows[order][1:] != rows[order][:-1]]]
-    rows, cols, length = rows[first], cols[first], length[first]
+    rows, cols, length = rows[order], cols[order], length[order]
+    starts = np.flatnonzero(np.r_[True, rows[1:] != rows[:-1]])
+    partner = starts if in_band is None else _first_spanning(rim, rows, cols, starts, in_band)
+    rows, cols, length = rows[partner], cols[partner], length[partner]
+    if len(rows) == 0:
+        return np.empty((0, 3)), np.empty(0)
     midpoints = (rim[rows] + rim[cols]) / 2
     around = radius_graph(midpoints, max_width_m / 2)
     typical = neighbour_mean(around, length)
@@ -75,3 +75,28 @@ def pair_midpoints(
     typical = (around @ (length * inliers)) / np.maximum(around @ inliers, 1.0)
     consistent = np.abs(length - typical) <= width_tolerance * typical
     return midpoints[consistent], length[consistent]
+
+
+def _first_spanning(rim, rows, cols, starts, in_band) -> np.ndarray:
+    """Per run of candidate pairs (rows[starts[k]:starts[k + 1]] all the same rim point, nearest
+    first), the index of the first pair whose points 1/4, 1/2 and 3/4 of the way across are all
+    in the band; runs with none are left out. Only the candidates up to a partner are tested:
+    1, 2, 4, ... more per run and round (in_band costs a nearest-neighbour search per point)."""
+    ends = np.r_[starts[1:], len(rows)]
+    fractions = np.array([0.25, 0.5, 0.75])[:, None, None]
+    found = np.full(len(starts), -1)
+    pending, tested, batch = np.arange(len(starts)), np.zeros(len(starts), dtype=np.int64), 1
+    while len(pending):
+        index = starts[pending, None] + tested[pending, None] + np.arange(batch)
+        valid = index < ends[pending, None]
+        candidates = index[valid]
+        first, second = rim[rows[candidates]], rim[cols[candidates]]
+        samples = first[None] + fractions * (second - first)[None]
+        spans = np.zeros(index.shape, dtype=bool)
+        spans[valid] = in_band(samples.reshape(-1, 3)).reshape(len(fractions), -1).all(axis=0)
+        hit = spans.any(axis=1)
+        found[pending[hit]] = index[hit, np.argmax(spans[hit], axis=1)]
+        tested[pending] += batch
+        pending = pending[~hit & (starts[pending] + tested[pending] < ends[pending])]
+        batch *= 2
+    return found[found >= 0]
