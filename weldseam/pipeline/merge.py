@@ -22,7 +22,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from weldseam.geometry import transform_points
-from weldseam.pipeline.neighbours import extreme_eigenvectors
+from weldseam.pipeline.neighbours import COVARIANCE_ENTRIES, extreme_eigenvectors
 
 COARSE_ITERATIONS = 20
 FINE_ITERATIONS = 20
@@ -122,7 +122,8 @@ def _surface(cloud: np.ndarray, origin: np.ndarray, voxel_m: float, max_incidenc
     covariance = np.stack(
         [(x * x).mean(axis=1), xy, xz, xy, (y * y).mean(axis=1), yz, xz, yz, (z * z).mean(axis=1)], axis=1
     ).reshape(-1, 3, 3)
-    normals = extreme_eigenvectors(covariance, largest=False)
+    rows, cols = np.array(COVARIANCE_ENTRIES).T
+    normals = extreme_eigenvectors(covariance[:, rows, cols], largest=False)
     rays = origin - sample
     facing = np.einsum("ij,ij->i", normals, rays)
     normals = np.where(facing[:, None] < 0, -normals, normals)

@@ -10,6 +10,9 @@ from weldseam.pipeline.parallel import MIN_BLOCK_ROWS, graph_rows, map_row_block
 
 # Clouds this large are searched for pairs on both cores (radius_pairs).
 SPLIT_MIN_POINTS = 2 * MIN_BLOCK_ROWS
+# The (row, column) of each of the six distinct entries of a symmetric 3 x 3 matrix, in the
+# order they are passed around: xx, yy, zz, xy, xz, yz.
+COVARIANCE_ENTRIES = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
 
 
 def radius_pairs(points: np.ndarray, radius_m: float) -> np.ndarray:
@@ -92,15 +95,13 @@ def graph_pairs(graph: sparse.csr_matrix) -> tuple[np.ndarray, np.ndarray]:
 
 
 def neighbour_covariance(points: np.ndarray, graph: sparse.csr_matrix) -> np.ndarray:
-    """Covariance (N, 3, 3) of each point's neighbours (rows of `graph`)."""
+    """The six distinct entries (N, 6) of the covariance of each point's neighbours (rows of
+    `graph`), in COVARIANCE_ENTRIES order: E[ab] - E[a] E[b]."""
     centred = points - points.mean(axis=0)
     x, y, z = centred.T
     moments = neighbour_mean(graph, np.column_stack([x, y, z, x * x, y * y, z * z, x * y, x * z, y * z]))
-    mean = moments[:, :3]
-    cov = np.empty((len(points), 3, 3))
-    for (a, b), column in zip(((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)), range(3, 9)):
-        cov[:, a, b] = cov[:, b, a] = moments[:, column] - mean[:, a] * mean[:, b]
-    return cov
+    first, second = np.array(COVARIANCE_ENTRIES).T
+    return moments[:, 3:] - moments[:, first] * moments[:, second]
 
 
 def principal_directions(points: np.ndarray, graph: sparse.csr_matrix) -> np.ndarray:
@@ -109,9 +110,9 @@ def principal_directions(points: np.ndarray, graph: sparse.csr_matrix) -> np.nda
 
 
 def extreme_eigenvectors(cov: np.ndarray, largest: bool) -> np.ndarray:
-    """Unit eigenvector (N, 3) of the largest or smallest eigenvalue of symmetric (N, 3, 3)
-    matrices, in closed form (vectorised over the six distinct entries; LAPACK's batched eigh
-    is ~10x slower here).
+    """Unit eigenvector (N, 3) of the largest or smallest eigenvalue of symmetric 3 x 3
+    matrices given by their six distinct entries (N, 6) in COVARIANCE_ENTRIES order, in
+    closed form (LAPACK's batched eigh is ~10x slower here).
 
     Eigenvalues by the trigonometric solution of the characteristic cubic; the eigenvector
     is the longest cross product of two rows of (A - lambda I), which are orthogonal to it.
@@ -121,8 +122,7 @@ def extreme_eigenvectors(cov: np.ndarray, largest: bool) -> np.ndarray:
 
 
 def _extreme_eigenvectors(cov: np.ndarray, largest: bool) -> np.ndarray:
-    xx, yy, zz = cov[:, 0, 0], cov[:, 1, 1], cov[:, 2, 2]
-    xy, xz, yz = cov[:, 0, 1], cov[:, 0, 2], cov[:, 1, 2]
+    xx, yy, zz, xy, xz, yz = cov.T
     q = (xx + yy + zz) / 3
     dx, dy, dz = xx - q, yy - q, zz - q
     off = xy * xy + xz * xz + yz * yz
