@@ -33,7 +33,7 @@ def thin_points(point_sets: list[np.ndarray], *, radius_m: float, iterations: in
         sizes = [len(points) for points in sets]
         points = np.concatenate(sets)
         # Each set about its own mean: the covariances then lose no digits to the sets' distance.
-        local = points - np.repeat([points.mean(axis=0) for points in sets], sizes, axis=0)
+        local = points - np.repeat([one.mean(axis=0) for one in sets], sizes, axis=0)
         graph = _graph(sets, radius_m)
         step = neighbour_mean(graph, local) - local
         tangent = principal_directions(local, graph)
