@@ -237,7 +237,7 @@ def _part_ends_ahead(points, tree, centre, travel, axis, template: GrooveTemplat
 def groove_template(points: np.ndarray, tree, fit: SectionFit, travel: np.ndarray, params: SectionParams):
     """The GrooveTemplate of a fitted groove section: its half-opening, and where the plate
     surface ends beside it, measured as a bridged section measures it."""
-    u, w, _ = _profile_at(points, tree, fit.point_m, travel, *_frame(travel, fit.torch_axis), params)
+    u, w = _fit_profile_points(points, tree, fit, travel, params)
     found = _surface_ends(u, w, fit.half_opening_m, fit.half_opening_m, params.groove_min_depth_m)
     ends = found[1] if found is not None else {}
     return GrooveTemplate(-ends[-1] if -1 in ends else None, ends[1] if 1 in ends else None, fit.half_opening_m,
@@ -246,8 +246,13 @@ def groove_template(points: np.ndarray, tree, fit: SectionFit, travel: np.ndarra
 
 def groove_bottom(points: np.ndarray, tree, fit: SectionFit, travel: np.ndarray, params: SectionParams):
     """How deep a groove fit's groove is (m below its surface line), from its section (_bottom)."""
+    return _bottom(*_fit_profile_points(points, tree, fit, travel, params), fit.half_opening_m)
+
+
+def _fit_profile_points(points, tree, fit: SectionFit, travel: np.ndarray, params: SectionParams):
+    """(u, w) of the section through a fit's seam point, across `travel`, in the fit's own frame."""
     u, w, _ = _profile_at(points, tree, fit.point_m, travel, *_frame(travel, fit.torch_axis), params)
-    return _bottom(u, w, fit.half_opening_m)
+    return u, w
 
 
 def _bottom(u: np.ndarray, w: np.ndarray, half_opening_m: float) -> float | None:
