@@ -82,8 +82,9 @@ def probe_chains(chains: list[Chain], approx_axes: list[np.ndarray], points, tre
         probes.append((chain.points[at], travel[at], frame_axes[at], lateral[at]))
     if not probes:
         return []
-    fits = iter(analyse_sections(points, tree, *(np.concatenate(part) for part in zip(*probes)), section_params))
-    return [any([next(fits).joint for _ in range(len(centres))]) for centres, *_ in probes]
+    fits = analyse_sections(points, tree, *(np.concatenate(part) for part in zip(*probes)), section_params)
+    starts = np.cumsum([0] + [len(centres) for centres, *_ in probes])
+    return [any(fit.joint for fit in fits[start:stop]) for start, stop in zip(starts[:-1], starts[1:])]
 
 
 def trace_chain(
