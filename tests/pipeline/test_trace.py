@@ -6,7 +6,15 @@ from weldseam.config import SectionConfig
 from weldseam.geometry import polyline_length
 from weldseam.pipeline.parallel import worker_process
 from weldseam.pipeline.section import section_params
-from weldseam.pipeline.trace import TracedSeam, extend_seam, extend_seams, inside_traced
+from weldseam.pipeline.trace import (
+    HOLE_EDGE_M,
+    TracedSeam,
+    _hole_aim,
+    end_curve,
+    extend_seam,
+    extend_seams,
+    inside_traced,
+)
 
 RING_RADIUS_M = 0.05
 STEP_M = 0.002
@@ -203,6 +211,37 @@ def test_an_extension_whose_end_leans_into_the_work_still_finds_the_seam_past_a_
     positions = extended(TracedSeam(leaning, seam.torch_axes, False, "v_groove", 1.0), points[~gap])
     beyond = positions[positions[:, 0] > -0.035]
     assert len(beyond) > 10 and np.abs(beyond[:, 1:]).max() < 0.0015
+    assert positions[:, 0].max() > -0.008, "on to the plate end"
+
+
+def leaning_end_trace():
+    """A straight trace along x to x = -0.049 whose last three points lean 0.5, 1.5 and 3 mm
+    sideways, as fits do where a hole's edge cuts their sections short (one groove wall seen)."""
+    seam = straight_trace(-0.075, -0.047, [0.0, 0.0, -1.0])
+    leaning = seam.positions_m.copy()
+    leaning[-3:, 1] = [0.0005, 0.0015, 0.003]
+    return TracedSeam(leaning, seam.torch_axes, False, "v_groove", 1.0)
+
+
+def test_a_hole_is_aimed_across_from_the_seam_before_the_fits_that_lean_at_its_edge():
+    seam = leaning_end_trace().positions_m
+    end_tangent = end_curve(seam)[0]
+    assert np.degrees(np.arccos(end_tangent[0])) > 5, "the end's own tangent leans with the last fits"
+    origin, direction, bend = _hole_aim(seam)
+    assert origin[0] < seam[-1][0] - HOLE_EDGE_M + 1e-9 and abs(origin[1]) < 1e-4, "a fit before the edge"
+    assert np.degrees(np.arccos(direction[0])) < 0.5 and np.linalg.norm(bend) < 1.0, "along the seam there"
+    assert _hole_aim(seam[-5:]) is None, "fewer than three fits before the edge: no second aim"
+
+
+def test_an_extension_crosses_a_short_hole_after_fits_that_lean_at_its_edge(rng):
+    """14 mm without data after the leaning end. Sought along the end's own tangent, the groove
+    beyond lies 9-11 mm sideways of the predictions, too far to be taken for it; sought from
+    before the hole's edge it is on the line, and carried on to the plate end."""
+    points = plate_ending_on_a_table(rng)
+    hole = (points[:, 0] > -0.0465) & (points[:, 0] < -0.0325)
+    positions = extended(leaning_end_trace(), points[~hole])
+    beyond = positions[(positions[:, 0] > -0.03) & (positions[:, 0] < -0.01)]
+    assert len(beyond) >= 8 and np.abs(beyond[:, 1:]).max() < 0.001, "found on the groove beyond the hole"
     assert positions[:, 0].max() > -0.008, "on to the plate end"
 
 

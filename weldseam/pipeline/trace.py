@@ -46,6 +46,9 @@ TEMPLATE_MEMORY = 6
 HOLE_CONFIRM = 2
 HOLE_RADIUS_M = 0.0015
 HOLE_STRAYS = 2
+# A hole's edge cuts the sections beside it short (one groove wall seen, the other not), so the
+# fits within this much arc of it may lean sideways: a hole is aimed across from the fits before.
+HOLE_EDGE_M = 0.006
 
 
 @dataclass(frozen=True)
@@ -345,6 +348,7 @@ def _extend_end(
     face_start = 0  # where the seam's current face begins (after a turn over an edge)
     direction, bend = end_curve(np.array(positions))
     bridged = [False] * len(positions)
+    fitted = np.array(positions)
     templates = _end_templates(np.array(positions), np.array(axes), points, tree, joint, section_params)
     steps: list[_Step] = []
     for _ in range(int(max_extension_m / step_m)):
@@ -366,7 +370,9 @@ def _extend_end(
                 direction, bend = travel, np.zeros(3)
                 face_start = len(positions) + (corner is not None)
             else:
-                fits = _across_hole(positions[-1], axes[-1], heading, bend, max_hole_m=max_hole_m, **search)
+                aims = [(positions[-1], heading, bend), _hole_aim(fitted)]
+                fits = _across_hole(positions[-1], axes[-1], [aim for aim in aims if aim is not None],
+                                    max_hole_m=max_hole_m, **search)  # fmt: skip
                 if fits is None:
                     break
                 hole = _hole(positions[-1], fits)
@@ -407,10 +413,16 @@ def _section_at(points, tree, predicted, travel, axis, section_params, joint, te
     template where it does not fit); depth and sideways are the fit's offsets (m) from the
     prediction along and across the axis."""
     fit = fit_section(points, tree, predicted, travel, axis, section_params, template, joint)
+    return fit, *_offsets(fit.point_m, predicted, travel, axis)
+
+
+def _offsets(point, predicted, travel, axis) -> tuple[float, float]:
+    """(depth, sideways): the offsets (m) of `point` from `predicted` along the torch `axis`
+    (made perpendicular to `travel`) and across it."""
     axis = unit(axis - (axis @ travel) * travel)
-    offset = fit.point_m - predicted
+    offset = point - predicted
     depth = abs(offset @ axis)
-    return fit, depth, np.linalg.norm(offset - (offset @ axis) * axis)
+    return depth, np.linalg.norm(offset - (offset @ axis) * axis)
 
 
 def _end_templates(positions, axes, points, tree, joint, section_params) -> list[GrooveTemplate | None]:
@@ -453,27 +465,49 @@ def _next_fit(
     return None
 
 
-def _across_hole(
-    last_point, last_axis, direction, bend, *, points, tree, joint, step_m, max_gap_m, max_hole_m, section_params
-) -> list[SectionFit] | None:
-    """Bridged points across a hole in the scan followed by the first HOLE_CONFIRM fits beyond
-    it, or None.
+def _hole_aim(fitted: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """(origin, direction, bend) of a curve to seek the seam along across a hole after the
+    `fitted` seam points (travel order): from the last of them more than HOLE_EDGE_M of arc
+    before the end, along the seam's curve there (end_curve of the fits up to it); None when
+    fewer than three fits lie before the edge."""
+    arc = arc_lengths(fitted[::-1])
+    before = fitted[: len(fitted) - int(np.searchsorted(arc, HOLE_EDGE_M, side="right"))]
+    return (before[-1], *end_curve(before)) if len(before) >= 3 else None
 
-    Sections are tried along the predicted curve (_ahead) from max_gap_m to max_hole_m ahead;
-    the first that fits the joint within 25 % of its distance sideways and 5 % in depth must be
-    followed by HOLE_CONFIRM - 1 more fits in a row, or by the part's end (_part_ends_after): a
-    hole can reach to within a section or two of the plate's end, and the scan then sees past the
-    plate right after the fits (a stray fit inside a longer hole has nothing after it). The hole
-    is bridged by a cubic Hermite curve between the two ends and their travel directions (torch
-    axes interpolated), and that curve must be empty: no more than HOLE_STRAYS scan points within
+
+def _across_hole(
+    last_point, last_axis, aims, *, points, tree, joint, step_m, max_gap_m, max_hole_m, section_params
+) -> list[SectionFit] | None:
+    """Bridged points across a hole in the scan after `last_point` followed by the first
+    HOLE_CONFIRM fits beyond it, or None.
+
+    Sections are tried from max_gap_m to max_hole_m ahead of the end along the curve of the first
+    of `aims` (origin, direction, bend: _ahead from the origin, the end's distance from it
+    added). The first section that fits the joint within 25 % of its distance sideways and 5 % in
+    depth of any aim's prediction (the fits at a hole's edge may lean, and the aim from before
+    them finds the seam where the end's own tangent misses it: _hole_aim) must be followed by
+    HOLE_CONFIRM - 1 more fits in a row, or by the part's end (_part_ends_after): a hole can reach
+    to within a section or two of the plate's end, and the scan then sees past the plate right
+    after the fits (a stray fit inside a longer hole has nothing after it). The hole is bridged by
+    a cubic Hermite curve between the two ends and their travel directions on that aim (torch axes
+    interpolated), and that curve must be empty: no more than HOLE_STRAYS scan points within
     HOLE_RADIUS_M of it. For a groove the seam point is the centre of the opening, in the air over
     the groove; where a plate's surface crosses the line, the groove has ended, and one ahead is
     another seam."""
+    leads = [max(0.0, float((last_point - origin) @ direction)) for origin, direction, _ in aims]
     for distance in np.arange(max_gap_m + step_m, max_hole_m + step_m / 2, step_m):
-        predicted, travel = _ahead(last_point, direction, bend, distance)
-        fit, depth, sideways = _section_at(points, tree, predicted, travel, last_axis, section_params, joint)
-        if fit.joint != joint or sideways > 0.25 * distance or depth > max(0.5 * step_m, 0.05 * distance):
+        predicted, travel = _ahead(*aims[0], leads[0] + distance)
+        fit = fit_section(points, tree, predicted, travel, last_axis, section_params, joint=joint)
+        if fit.joint != joint:
             continue
+        for (origin, direction, bend), lead in zip(aims, leads):
+            predicted, travel = _ahead(origin, direction, bend, lead + distance)
+            depth, sideways = _offsets(fit.point_m, predicted, travel, last_axis)
+            if sideways <= 0.25 * distance and depth <= max(0.5 * step_m, 0.05 * distance):
+                break
+        else:
+            continue
+        leaving = _ahead(origin, direction, bend, lead)[1]  # the aim's travel at the end
         run = [fit]
         while len(run) < HOLE_CONFIRM:
             following = _next_fit(run[-1].point_m, run[-1].torch_axis, travel, bend, points=points, tree=tree,
@@ -483,15 +517,15 @@ def _across_hole(
                 break
             run.append(following)
         if len(run) < HOLE_CONFIRM and not _part_ends_after(
-            run[-1], travel, last_point, last_axis, direction, points=points, tree=tree, reach_m=max_gap_m,
+            run[-1], travel, last_point, last_axis, leaving, points=points, tree=tree, reach_m=max_gap_m,
             section_params=section_params,
         ):
             return None
         arrival = unit(run[-1].point_m - run[0].point_m) if len(run) > 1 else travel
-        line = _hermite(last_point, direction, fit.point_m, arrival, HOLE_RADIUS_M)
+        line = _hermite(last_point, leaving, fit.point_m, arrival, HOLE_RADIUS_M)
         if tree.query_ball_point(line, HOLE_RADIUS_M, return_length=True).sum() > HOLE_STRAYS:
             return None
-        bridge = _hermite(last_point, direction, fit.point_m, arrival, step_m)
+        bridge = _hermite(last_point, leaving, fit.point_m, arrival, step_m)
         weights = np.linspace(0.0, 1.0, len(bridge) + 2)[1:-1, None]
         tilts = unit((1 - weights) * last_axis + weights * fit.torch_axis)
         return [SectionFit(joint, p, a, fit.half_opening_m, bridged=True) for p, a in zip(bridge, tilts)] + run
