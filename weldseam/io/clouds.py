@@ -18,9 +18,11 @@ from typing import BinaryIO
 import numpy as np
 
 from weldseam.errors import InputError
-from weldseam.io.files import read_input
+from weldseam.geometry import finite_rows
 from weldseam.io.atomic import atomic_write
+from weldseam.io.files import read_input
 from weldseam.types import as_points
+
 
 def read_cloud(path: str | Path, *, stdin: BinaryIO | None = None) -> tuple[np.ndarray, str]:
     """Read a point cloud file.
@@ -48,7 +50,7 @@ def read_cloud(path: str | Path, *, stdin: BinaryIO | None = None) -> tuple[np.n
     points = _PARSERS[suffix](data, name)
     if len(points) == 0:
         raise InputError(f"{name}: the cloud has no points")
-    if not np.isfinite(points).all(axis=1).any():
+    if not finite_rows(points).any():
         raise InputError(f"{name}: all {len(points)} points are NaN or infinite")
     return points, hashlib.sha256(data).hexdigest()
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from weldseam.errors import InputError
-from weldseam.geometry import transform_points
+from weldseam.geometry import column_bounds, finite_rows, transform_points
 from weldseam.io.clouds import read_cloud
 from weldseam.io.depth import backproject_depth, read_depth_png, read_intrinsics
 from weldseam.io.files import read_json
@@ -130,10 +130,11 @@ def read_frames_manifest(path: str | Path) -> tuple[list[FrameSpec], str | None]
 
 
 def _check_units(source: str, points: np.ndarray, units: str) -> None:
-    finite = points[np.isfinite(points).all(axis=1)]
+    finite = points.take(np.flatnonzero(finite_rows(points)), axis=0)
     if len(finite) < 2:
         return
-    extent = float(np.linalg.norm(finite.max(axis=0) - finite.min(axis=0)))
+    low, high = column_bounds(finite)
+    extent = float(np.linalg.norm(high - low))
     if extent > LARGEST_PLAUSIBLE_EXTENT_M:
         hint = "it looks like millimetres: pass --units mm" if units == "m" else "check the file's units"
         raise InputError(f"{source}: the cloud spans {extent:.4g} m, too large for a workpiece scan; {hint}")

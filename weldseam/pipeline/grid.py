@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from weldseam.geometry import column_bounds
 from weldseam.pipeline.parallel import row_blocks, run_parts
 
 
@@ -17,8 +18,8 @@ def voxel_centroids(points: np.ndarray, leaf_m: float) -> np.ndarray:
     """
     if len(points) == 0:
         return points.copy()
-    cells = np.floor((points - points.min(axis=0)) / leaf_m).astype(np.int64)
-    extent = cells.max(axis=0) + 1
+    cells = np.floor((points - column_bounds(points)[0]) / leaf_m).astype(np.int64)
+    extent = column_bounds(cells)[1] + 1
     keys = (cells[:, 0] * extent[1] + cells[:, 1]) * extent[2] + cells[:, 2]
     blocks = row_blocks(len(points))
     if len(blocks) == 1:

@@ -6,6 +6,7 @@ import numpy as np
 from scipy import sparse
 from scipy.spatial import cKDTree
 
+from weldseam.geometry import column_bounds
 from weldseam.pipeline.parallel import MIN_BLOCK_ROWS, graph_rows, map_row_blocks, run_parts
 
 # Clouds this large are searched for pairs on both cores (radius_pairs).
@@ -26,7 +27,8 @@ def radius_pairs(points: np.ndarray, radius_m: float) -> np.ndarray:
     """
     if len(points) < SPLIT_MIN_POINTS:
         return _pairs_within(points, radius_m)
-    along = points[:, int(np.argmax(np.ptp(points, axis=0)))]
+    low, high = column_bounds(points)
+    along = points[:, int(np.argmax(high - low))]
     cut = np.median(along)
     below, above = np.flatnonzero(along < cut), np.flatnonzero(along >= cut)
     within = run_parts(lambda half: half.astype(np.int32)[_pairs_within(points[half], radius_m)], [below, above])
