@@ -37,3 +37,16 @@ def test_two_separate_lines_give_two_chains():
     line = np.column_stack([np.arange(0, 0.05, 0.003), np.zeros(17), np.zeros(17)])
     chains = order_chains(np.vstack([line, line + [0, 0.05, 0]]), link_m=0.005, min_branch_m=0.015)
     assert len(chains) == 2
+
+
+def test_a_spur_longer_than_min_branch_is_a_branch_and_a_shorter_one_is_pruned():
+    """The walk from a spur's leaf stops once min_branch_m is reached: the decision at the
+    junction must not change (a spur of 18 mm stays, 12 mm goes, with min_branch_m 15 mm)."""
+    line = np.column_stack([np.arange(0, 0.1, 0.003), np.zeros(34), np.zeros(34)])
+    for points_on_spur, chains_expected in ((6, 3), (4, 1)):
+        spur = np.column_stack([np.full(points_on_spur, 0.051), 0.003 * np.arange(1, points_on_spur + 1),
+                                np.zeros(points_on_spur)])  # fmt: skip
+        chains = order_chains(np.vstack([line, spur]), link_m=0.0035, min_branch_m=0.015)
+        assert len(chains) == chains_expected
+        used = np.unique(np.vstack([chain.points for chain in chains]).round(9), axis=0)
+        assert len(used) == 34 + (points_on_spur if chains_expected == 3 else 0), "no point lost but the pruned"

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -62,7 +63,10 @@ def _spanning_tree(points: np.ndarray, link_m: float) -> dict[int, set[int]]:
 
 
 def _prune_spurs(adjacency: dict[int, set[int]], points: np.ndarray, min_branch_m: float) -> None:
-    """Remove leaf-to-junction runs shorter than min_branch_m, until none is left."""
+    """Remove leaf-to-junction runs shorter than min_branch_m, until none is left. A run is
+    walked from its leaf only until it reaches min_branch_m (a seam's own chain is hundreds of
+    points long, and each of its two leaves is tried on every round)."""
+    coordinates = points.tolist()
     changed = True
     while changed:
         changed = False
@@ -71,11 +75,11 @@ def _prune_spurs(adjacency: dict[int, set[int]], points: np.ndarray, min_branch_
                 continue
             run, length = [leaf], 0.0
             previous, current = leaf, next(iter(adjacency[leaf]))
-            while len(adjacency[current]) == 2:
-                length += float(np.linalg.norm(points[current] - points[previous]))
+            while len(adjacency[current]) == 2 and length < min_branch_m:
+                length += math.dist(coordinates[current], coordinates[previous])
                 run.append(current)
                 previous, current = current, next(n for n in adjacency[current] if n != previous)
-            length += float(np.linalg.norm(points[current] - points[previous]))
+            length += math.dist(coordinates[current], coordinates[previous])
             if len(adjacency[current]) >= 3 and length < min_branch_m:
                 for node in run:
                     for near in adjacency.pop(node):
