@@ -4,6 +4,8 @@ from scipy.spatial import cKDTree
 
 from weldseam.config import SectionConfig
 from weldseam.geometry import polyline_length
+from weldseam.pipeline import section
+from weldseam.pipeline.order import Chain
 from weldseam.pipeline.parallel import worker_process
 from weldseam.pipeline.section import section_params
 from weldseam.pipeline.trace import (
@@ -14,6 +16,8 @@ from weldseam.pipeline.trace import (
     extend_seam,
     extend_seams,
     inside_traced,
+    probe_chains,
+    trace_chain,
 )
 
 RING_RADIUS_M = 0.05
@@ -285,3 +289,28 @@ def test_extending_the_ends_apart_gives_the_seams_extended_one_end_after_the_oth
         assert serial.positions_m.tobytes() == parallel.positions_m.tobytes()
         assert serial.torch_axes.tobytes() == parallel.torch_axes.tobytes()
         assert serial.holes == parallel.holes and serial.closed == parallel.closed
+
+
+def test_a_chains_probe_fits_are_reused_by_its_trace_and_give_the_same_seam(rng, monkeypatch):
+    """The probes are sections at chain points in the trace's own frames: reusing them saves
+    their fits and changes nothing (a wide groove, whose chain along one edge is refitted)."""
+    x, y = grid((-0.07, 0.07), (-0.035, 0.035))
+    points = np.column_stack([x, y, -v_depth(y, half_open=0.008, depth=0.006)]) + rng.normal(0, 0.0001, (len(x), 3))
+    along = np.arange(-0.05, 0.05, 0.0025)
+    chain = Chain(np.column_stack([along, np.full(len(along), -0.008), np.zeros(len(along))]), False)
+    approx_axes = np.tile([0.0, np.sin(np.radians(15)), -np.cos(np.radians(15))], (len(along), 1))
+    tree = cKDTree(points)
+    probe_fits = probe_chains([chain], [approx_axes], points, tree, SECTION_PARAMS)[0]
+    assert sorted(probe_fits) == [0, 20, 39] and all(fit.joint == "v_groove" for fit in probe_fits.values())
+    fitted = []
+    fit_one = section._fit_one
+    monkeypatch.setattr(section, "_fit_one", lambda *args: fitted.append(1) or fit_one(*args))
+    options = dict(step_m=STEP_M, max_gap_m=0.012, min_valid_fraction=0.6, section_params=SECTION_PARAMS)
+    reused = trace_chain(chain, approx_axes, probe_fits, points, tree, **options)
+    fits_with_probes = len(fitted)
+    alone = trace_chain(chain, approx_axes, {}, points, tree, **options)
+    assert fits_with_probes == len(fitted) - fits_with_probes - 2 * len(probe_fits), "each probe fitted twice, once"
+    assert len(reused) == len(alone) == 1
+    assert np.array_equal(reused[0].positions_m, alone[0].positions_m)
+    assert np.array_equal(reused[0].torch_axes, alone[0].torch_axes)
+    assert np.abs(reused[0].positions_m[:, 1:]).max() < 0.0005, "on the seam line, at the surface"

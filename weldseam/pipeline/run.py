@@ -213,14 +213,15 @@ def plan_paths(
             approx_axes = _approximate_torch_axes(
                 [chain.points for chain in chains], normals, working_tree, c.section.face_radius_m
             )
-            probed = probe_chains(chains, approx_axes, fine, fine_tree, params)
+            probes = probe_chains(chains, approx_axes, fine, fine_tree, params)
             pieces: dict[int, list[TracedSeam]] = {}
             traced_so_far: list[TracedSeam] = []
             for k in by_length:
-                if not probed[k] or inside_traced(chains[k].points, traced_so_far, c.section.face_radius_m / 2):
+                fitted = any(fit.joint for fit in probes[k].values())
+                if not fitted or inside_traced(chains[k].points, traced_so_far, c.section.face_radius_m / 2):
                     continue
                 pieces[k] = trace_chain(
-                    chains[k], approx_axes[k], fine, fine_tree,
+                    chains[k], approx_axes[k], probes[k], fine, fine_tree,
                     step_m=c.resample.spacing_m, max_gap_m=c.section.max_gap_m,
                     min_valid_fraction=c.section.min_valid_fraction, section_params=params,
                 )

@@ -74,25 +74,29 @@ class TracedSeam:
     half_opening_m: float = 0.0
 
 
-def probe_chains(chains: list[Chain], approx_axes: list[np.ndarray], points, tree, section_params: SectionParams):
-    """For each chain, whether any of PROBE_SECTIONS evenly spaced sections along it fits a
-    joint: most candidate chains are plate or table edges, rejected this way without fitting
-    every section. All chains' probes are fitted in one batch (half on the worker process)."""
+def probe_chains(
+    chains: list[Chain], approx_axes: list[np.ndarray], points, tree, section_params: SectionParams
+) -> list[dict[int, SectionFit]]:
+    """For each chain, the fits of PROBE_SECTIONS evenly spaced sections along it, by chain point
+    index: a chain where none fits a joint is not a seam (most candidates are plate or table
+    edges, rejected this way without fitting every section), and trace_chain reuses them. All
+    chains' probes are fitted in one batch (half on the worker process)."""
     probes = []
     for chain, axes in zip(chains, approx_axes):
         travel, frame_axes, lateral = section_frames(chain.points, axes, chain.closed)
         at = np.unique(np.linspace(0, len(chain.points) - 1, PROBE_SECTIONS).round().astype(int))
-        probes.append((chain.points[at], travel[at], frame_axes[at], lateral[at]))
+        probes.append((at, (chain.points[at], travel[at], frame_axes[at], lateral[at])))
     if not probes:
         return []
-    fits = analyse_sections(points, tree, *(np.concatenate(part) for part in zip(*probes)), section_params)
-    starts = np.cumsum([0] + [len(centres) for centres, *_ in probes])
-    return [any(fit.joint for fit in fits[start:stop]) for start, stop in zip(starts[:-1], starts[1:])]
+    frames = (np.concatenate(part) for part in zip(*(frame for _, frame in probes)))
+    fits = iter(analyse_sections(points, tree, *frames, section_params))
+    return [{int(k): next(fits) for k in at} for at, _ in probes]
 
 
 def trace_chain(
     chain: Chain,
     approx_axes: np.ndarray,
+    probe_fits: dict[int, SectionFit],
     points: np.ndarray,
     tree,
     *,
@@ -102,9 +106,14 @@ def trace_chain(
     section_params: SectionParams,
 ) -> list[TracedSeam]:
     """Seams found along one chain (none if the chain is not a seam): a section at every
-    chain point (probe_chains first rejects most chains that are not)."""
+    chain point (probe_chains first rejects most chains that are not). The chain's probes are
+    sections at some of its points in the same frames, fitted as these are: they are not
+    fitted again."""
     travel, axes, lateral = section_frames(chain.points, approx_axes, chain.closed)
-    fits = analyse_sections(points, tree, chain.points, travel, axes, lateral, section_params)
+    rest = np.array([k for k in range(len(chain.points)) if k not in probe_fits], dtype=int)
+    fitted = iter(analyse_sections(points, tree, chain.points[rest], travel[rest], axes[rest], lateral[rest],
+                                   section_params))  # fmt: skip
+    fits = [probe_fits[k] if k in probe_fits else next(fitted) for k in range(len(chain.points))]
     kinds = Counter(fit.joint for fit in fits if fit.joint)
     if not kinds:
         return []
