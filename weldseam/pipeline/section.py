@@ -387,7 +387,7 @@ def _fit_groove(u: np.ndarray, w: np.ndarray, face_radius_m: float, min_depth_m:
         sigma = max(_noise(residual[on_surface]), SURFACE_NOISE_FLOOR_M)
         depth_limit = max(3 * sigma, 0.4 * min_depth_m)
         updated = (residual > -depth_limit) & (residual < 4 * sigma + depth_limit)
-        if np.count_nonzero(updated) < 6 or not np.any(updated ^ on_surface):
+        if np.count_nonzero(updated) < 6 or np.array_equal(updated, on_surface):
             break
         on_surface = updated
     depth = -residual
