@@ -182,6 +182,24 @@ def test_an_extension_does_not_pass_an_oblique_plate_end_with_nothing_seen_past_
     assert positions[:, 0].max() < 0.0
 
 
+def plates_in_line_with_a_gap(rng, gap_m):
+    """Two 12 mm plates (top z = 0) in line, each with a 6 mm deep groove along x, on a table
+    (z = -0.012) that shows through a gap of `gap_m` between them starting at x = -0.03."""
+    x, y = grid((-0.08, 0.06), (-0.03, 0.03))
+    in_gap = (x >= -0.03) & (x < -0.03 + gap_m)
+    points = np.column_stack([x, y, np.where(in_gap, -0.012, -v_depth(y, depth=0.006))])
+    return points + rng.normal(0, 0.0001, points.shape)
+
+
+@pytest.mark.parametrize("gap_m", [0.012, 0.02, 0.03])
+def test_an_extension_stops_at_a_plate_end_where_the_table_shows_before_the_next_plate(rng, gap_m):
+    """The camera sees the table through the gap: the seam ends there, and the groove in line on
+    the next plate is another seam, not the same one across a hole."""
+    positions = extended(straight_trace(-0.075, -0.055, [0.0, 0.0, -1.0]), plates_in_line_with_a_gap(rng, gap_m))
+    assert -0.033 < positions[:, 0].max() < -0.028, "to the plate end, not across the gap"
+    assert np.abs(positions[:, 1:]).max() < 0.0015
+
+
 def test_an_extension_never_crosses_where_the_groove_stops_and_flat_plate_goes_on(rng):
     """A groove along x interrupted for 20 mm (-0.04 < x < -0.02) by flat plate, then going on:
     two seams in line, and the weld must not be carried across the flat stretch."""

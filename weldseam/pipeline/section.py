@@ -202,8 +202,9 @@ def fit_section(
     plate edge crosses the section obliquely, the table beyond it sits beside the groove and
     spoils the surface line); failing that, where the surface ends beside the groove are known,
     it is bridged over a sensor dropout (see bridge_groove) from the same profile, or, where the
-    scan sees past the part's end ahead (_part_ends_ahead), over an end that crosses the groove
-    obliquely."""
+    scan sees past the part's end within the section window's reach ahead (part_ends_ahead), over
+    an end that crosses the groove obliquely (up to 70 degrees from square such an end cuts one
+    side tan(70) x half-opening before the seam line: 22 mm for an 8 mm half-opening)."""
     axis, lateral = _frame(travel, axis)
     u, w, along = _profile_at(points, tree, centre, travel, axis, lateral, params)
     profile = _fit_profile_with(params, u, w, joint)
@@ -218,20 +219,21 @@ def fit_section(
         return _to_3d(None, centre, axis, lateral)
     bridge = dict(face_radius_m=params.face_radius_m, groove_min_depth_m=params.groove_min_depth_m)
     bridged = bridge_groove(u, w, along, template, **bridge)
-    if bridged is None and _part_ends_ahead(points, tree, centre, travel, axis, template, params):
+    if bridged is None and part_ends_ahead(points, tree, centre, travel, axis, template, params.half_width_m, params):
         bridged = bridge_groove(u, w, along, template, **bridge, part_ends=True)
     return replace(_to_3d(bridged, centre, axis, lateral), bridged=True)
 
 
-def _part_ends_ahead(points, tree, centre, travel, axis, template: GrooveTemplate, params: SectionParams) -> bool:
-    """Whether the scan sees past the part's end (sees_past_end) within the section window's
-    reach (half_width_m) ahead of `centre`, on the groove the template describes. An end that
-    crosses the groove at up to 70 degrees from square ends the plate on one side up to
-    tan(70) x half-opening before the seam line (22 mm for an 8 mm half-opening)."""
+def part_ends_ahead(
+    points, tree, centre, travel, axis, template: GrooveTemplate, reach_m: float, params: SectionParams
+) -> bool:
+    """Whether the scan sees past the part's end (sees_past_end) within `reach_m` ahead of
+    `centre`, on the groove the template describes (its half-opening and bottom; False when
+    either is unknown)."""
     if template.bottom_m is None or template.half_opening_m is None:
         return False
     ahead = SectionFit(V_GROOVE, centre, axis, template.half_opening_m)
-    return sees_past_end(points, tree, ahead, travel, params.half_width_m, template.bottom_m, params)
+    return sees_past_end(points, tree, ahead, travel, reach_m, template.bottom_m, params)
 
 
 def groove_template(points: np.ndarray, tree, fit: SectionFit, travel: np.ndarray, params: SectionParams):

@@ -27,6 +27,7 @@ from weldseam.pipeline.section import (
     fit_section,
     groove_bottom,
     groove_template,
+    part_ends_ahead,
     section_frames,
     sees_past_end,
 )
@@ -271,7 +272,10 @@ def extend_seam(
     over a block's edge, or up a wall): the turned prediction is tried within max_gap_m of the
     end, and a run of fits there at least TURN_CONFIRM_M long continues the seam on the new
     face. Where neither finds the seam, it may cross a hole in the scan up to `max_hole_m` long
-    (_across_hole); the hole is filled with interpolated (bridged) points. An extension stops
+    (_across_hole); the hole is filled with interpolated (bridged) points. No hole is sought
+    where the scan sees past the part's end within max_gap_m ahead (part_ends_ahead): in a hole
+    the camera sees nothing, past the part's end it sees what lies beyond (the table), and a
+    seam on another part in line beyond that gap is another seam. An extension stops
     where it comes within two steps of the seam itself (it has gone round a loop; the ends then
     meet and the seam closes). Run on joined seams only: extending every partial trace would
     walk the same seam once per piece.
@@ -366,8 +370,8 @@ def _extend_end(
         # noisy end is not worth following).
         since = _arc_since_fit(positions, bridged)
         heading, ahead_bend = unit(direction + since * bend), (bend if since > 0 else np.zeros(3))
-        fit = _next_fit(positions[-1], axes[-1], heading, ahead_bend, template=_median_template(templates),
-                        **search)  # fmt: skip
+        template = _median_template(templates)
+        fit = _next_fit(positions[-1], axes[-1], heading, ahead_bend, template=template, **search)
         fits, hole = [fit], None
         if fit is None:
             turned = _turned_run(positions[-1], axes[-1], heading, **search)
@@ -379,6 +383,9 @@ def _extend_end(
                 direction, bend = travel, np.zeros(3)
                 face_start = len(positions) + (corner is not None)
             else:
+                if template is not None and part_ends_ahead(points, tree, positions[-1], heading, axes[-1], template,
+                                                            max_gap_m, section_params):  # fmt: skip
+                    break
                 aims = [(positions[-1], heading, bend), _hole_aim(fitted)]
                 fits = _across_hole(positions[-1], axes[-1], [aim for aim in aims if aim is not None],
                                     max_hole_m=max_hole_m, **search)  # fmt: skip
