@@ -396,9 +396,14 @@ def _fit_groove(u: np.ndarray, w: np.ndarray, face_radius_m: float, min_depth_m:
     deep = np.flatnonzero(depth > depth_limit)
     if len(deep) < 4:
         return None
-    # The depression: the largest run of deep points with gaps under 4 mm between them.
-    runs = np.split(deep, np.flatnonzero(np.diff(u[deep]) > 0.004) + 1)
-    groove = max(runs, key=len)
+    # The depression: the largest run of deep points with gaps under 4 mm between them (the
+    # first of the largest).
+    groove = deep
+    breaks = np.flatnonzero(np.diff(u[deep]) > 0.004) + 1
+    if len(breaks):
+        bounds = np.concatenate(([0], breaks, [len(deep)]))
+        longest = int(np.argmax(np.diff(bounds)))
+        groove = deep[bounds[longest] : bounds[longest + 1]]
     u_start, u_end = u[groove[0]], u[groove[-1]]
     left_surface = on_surface & (u < u_start)
     right_surface = on_surface & (u > u_end)
@@ -562,7 +567,7 @@ def _groove_edges(
         if slope is not None:
             edge = -_median(depth[wall] - slope * u[wall]) / slope
             # Between 3 mm outside the last surface point and the middle of the wall.
-            low, high = sorted((surface_end + side * 0.003, u[wall].mean()))
+            low, high = sorted((surface_end + side * 0.003, float(np.add.reduce(u[wall])) / len(wall)))
             edge = edge if low <= edge <= high else None
         at_surface_end.append(edge is None)
         edges.append(float(surface_end if edge is None else edge))
@@ -574,9 +579,9 @@ def _groove_edges(
 
 
 def _wall_slope(u: np.ndarray, depth: np.ndarray, side: int) -> float | None:
-    """Slope of a robust line through one wall's points, or None when there are too few or
-    the line is not steep toward the middle (at least 11 degrees)."""
-    if len(u) < 4 or np.ptp(u) < 0.0006:
+    """Slope of a robust line through one wall's points (`u` ascending), or None when there are
+    too few or the line is not steep toward the middle (at least 11 degrees)."""
+    if len(u) < 4 or u[-1] - u[0] < 0.0006:
         return None
     intercept, slope = _line(u, depth)
     residual = depth - (intercept + slope * u)
@@ -589,13 +594,14 @@ def _wall_slope(u: np.ndarray, depth: np.ndarray, side: int) -> float | None:
 def _fit_fillet(u: np.ndarray, w: np.ndarray, min_leg_m: float) -> _ProfileFit | None:
     """Two lines, left and right of a break; the break minimising the total squared error."""
     n = len(u)
-    sums = [np.concatenate([[0.0], np.cumsum(v)]) for v in (np.ones(n), u, w, u * u, u * w, w * w)]
     splits = np.arange(5, n - 4)
     if len(splits) == 0:
         return None
-    left = [s[splits] for s in sums]
-    right = [s[-1] - s[splits] for s in sums]
-    error = _segment_error(*left) + _segment_error(*right)
+    # Running sums of 1, u, w, u^2, uw, w^2 (one column each; a cumulative sum runs in order).
+    sums = np.cumsum(np.column_stack([np.ones(n), u, w, u * u, u * w, w * w]), axis=0)
+    left = sums[splits - 1]
+    right = sums[-1] - left
+    error = _segment_error(*left.T) + _segment_error(*right.T)
     split = int(splits[np.argmin(error)])
     fits = []
     for part in (slice(0, split), slice(split, n)):
