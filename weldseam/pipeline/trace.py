@@ -382,10 +382,10 @@ def _extend_end(
                     fits.insert(0, SectionFit(joint, corner, unit(axes[-1] + fits[0].torch_axis)))
                 direction, bend = travel, np.zeros(3)
                 face_start = len(positions) + (corner is not None)
+            elif template is not None and part_ends_ahead(points, tree, positions[-1], heading, axes[-1], template,
+                                                          max_gap_m, section_params):  # fmt: skip
+                break  # the scan sees past the part's end: no hole to cross
             else:
-                if template is not None and part_ends_ahead(points, tree, positions[-1], heading, axes[-1], template,
-                                                            max_gap_m, section_params):  # fmt: skip
-                    break
                 aims = [(positions[-1], heading, bend), _hole_aim(fitted)]
                 fits = _across_hole(positions[-1], axes[-1], [aim for aim in aims if aim is not None],
                                     max_hole_m=max_hole_m, **search)  # fmt: skip
