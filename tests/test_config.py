@@ -50,7 +50,7 @@ def test_a_path_json_is_a_config_that_reproduces_its_run(tmp_path):
         ("[normal]\nradius_m = 0.008\n", "unknown config section 'normal'"),
         ("[normals]\nradius_m = 'big'\n", "normals.radius_m must be a number"),
         ("[thinning]\niterations = 2.5\n", "thinning.iterations must be an integer"),
-        ("[section]\nmax_hole_m = -0.01\n", "section.max_hole_m must be a finite number >= 0, got -0.01"),
+        ("[extend]\nmax_hole_m = -0.01\n", "extend.max_hole_m must be a finite number >= 0, got -0.01"),
         ("[thinning]\niterations = -3\n", "thinning.iterations must be a finite number >= 0, got -3"),
         ("[condition]\nvoxel_m = nan\n", "condition.voxel_m must be a finite number >= 0, got nan"),
         ("[descriptor]\nvariant = 'paper'\n", "descriptor.variant must be one of released, thesis"),

@@ -76,7 +76,7 @@ class SegmentConfig:
     threshold: float | None = _param(None, "descriptor threshold; default: automatic (see segment.py)")
     min_crease_deg: float = _param(20.0, "automatic threshold: the weakest crease that counts as a seam")
     cluster_tolerance_m: float = _param(0.006, "Euclidean clustering distance between seam points")
-    min_seam_length_m: float = _param(0.02, "drop candidates shorter than this")
+    min_seam_length_m: float = _param(0.02, "candidate creases shorter than this are not traced")
 
 
 @dataclass(frozen=True)
@@ -107,29 +107,61 @@ class GridConfig:
 class OrderConfig:
     link_m: float = _param(0.008, "largest gap between consecutive seam points that is bridged")
     min_branch_m: float = _param(0.015, "side branches shorter than this are noise and pruned")
-    join_m: float = _param(0.025, "pieces of one seam whose facing ends are this close are joined")
-    overlap_m: float = _param(0.004, "traces closer than this to a longer one are the same seam")
-    max_join_turn_deg: float = _param(
-        100.0, "pieces meeting at up to this turn are joined (a groove over a block edge turns 90)"
-    )
 
 
 @dataclass(frozen=True)
 class SectionConfig:
     half_width_m: float = _param(0.025, "cross-section reach from the seam (radius of the window)")
     slab_m: float = _param(0.003, "cross-section thickness along the seam")
-    face_radius_m: float = _param(0.012, "how far beside the seam the faces are fitted (torch axis)")
+
+
+@dataclass(frozen=True)
+class JointsConfig:
+    face_radius_m: float = _param(0.012, "how far beside the seam the faces that set the torch axis are fitted")
     groove_min_depth_m: float = _param(0.0015, "shallowest groove that counts")
     fillet_min_leg_m: float = _param(0.012, "shortest face of a fillet (shorter: a plate edge on a table)")
-    min_valid_fraction: float = _param(0.6, "a seam whose sections fit its joint less often is rejected")
-    ignore_support_corners: bool = _param(
-        True, "a fillet on the support plane (the table) is where a part rests, not a joint"
+
+
+@dataclass(frozen=True)
+class TraceConfig:
+    min_valid_fraction: float = _param(0.6, "a candidate whose sections fit one joint less often is not a seam")
+    max_gap_m: float = _param(0.012, "a run of failed sections longer than this splits a traced seam")
+    max_jump_m: float = _param(0.004, "a seam point this far from the median of its 5 neighbours' is dropped")
+
+
+@dataclass(frozen=True)
+class SupportConfig:
+    enabled: bool = _param(True, "a fillet on the support plane (the table) is where a part rests, not a joint")
+    tolerance_m: float = _param(0.002, "how far a point may lie from the support plane and be on it")
+    below_fraction: float = _param(0.05, "share of points allowed beyond the support plane (noise, outliers)")
+
+
+@dataclass(frozen=True)
+class JoinConfig:
+    overlap_m: float = _param(0.004, "traces closer than this to a longer one are the same seam")
+    join_m: float = _param(0.025, "pieces of one seam whose facing ends are this close are joined")
+    max_turn_deg: float = _param(
+        100.0, "pieces meeting at up to this turn are joined (a groove over a block edge turns 90)"
     )
-    max_gap_m: float = _param(0.012, "a run of failed sections longer than this splits the seam")
+
+
+@dataclass(frozen=True)
+class ExtendConfig:
+    step_m: float = _param(0.002, "distance between the sections an extension tries")
+    max_skip_m: float = _param(0.012, "longest run of failed sections an extension steps over")
     max_extension_m: float = _param(0.3, "how far an open seam end may be extended section by section")
     max_hole_m: float = _param(
         0.05, "longest hole in the scan (no data on the seam line) a seam is carried across, interpolated"
     )
+    edge_search_m: float = _param(0.012, "how far ahead an edge the seam turns over (90 degrees) is sought")
+    part_end_reach_m: float = _param(0.012, "seeing past the part's end this far ahead stops the seam there")
+
+
+@dataclass(frozen=True)
+class SplitConfig:
+    junction_m: float = _param(0.0125, "a seam end this close to another seam's interior is a junction on it")
+    min_branch_m: float = _param(0.015, "a piece shorter than this is no branch and splits nothing")
+    min_seam_length_m: float = _param(0.02, "seams shorter than this are dropped")
 
 
 @dataclass(frozen=True)
@@ -162,8 +194,30 @@ class PlanConfig:
     grid: GridConfig = field(default_factory=GridConfig)
     order: OrderConfig = field(default_factory=OrderConfig)
     section: SectionConfig = field(default_factory=SectionConfig)
+    joints: JointsConfig = field(default_factory=JointsConfig)
+    trace: TraceConfig = field(default_factory=TraceConfig)
+    support: SupportConfig = field(default_factory=SupportConfig)
+    join: JoinConfig = field(default_factory=JoinConfig)
+    extend: ExtendConfig = field(default_factory=ExtendConfig)
+    split: SplitConfig = field(default_factory=SplitConfig)
     resample: ResampleConfig = field(default_factory=ResampleConfig)
     output: OutputConfig = field(default_factory=OutputConfig)
+
+
+# Keys of weldseam 0.1's seam core that became the steps' own sections.
+MOVED_KEYS = {
+    "section.face_radius_m": "joints.face_radius_m",
+    "section.groove_min_depth_m": "joints.groove_min_depth_m",
+    "section.fillet_min_leg_m": "joints.fillet_min_leg_m",
+    "section.min_valid_fraction": "trace.min_valid_fraction",
+    "section.ignore_support_corners": "support.enabled",
+    "section.max_gap_m": "trace.max_gap_m, extend.max_skip_m, extend.edge_search_m and extend.part_end_reach_m",
+    "section.max_extension_m": "extend.max_extension_m",
+    "section.max_hole_m": "extend.max_hole_m",
+    "order.join_m": "join.join_m",
+    "order.overlap_m": "join.overlap_m",
+    "order.max_join_turn_deg": "join.max_turn_deg",
+}
 
 
 def config_to_dict(config: PlanConfig) -> dict:
@@ -190,7 +244,8 @@ def with_overrides(config: PlanConfig, overrides: dict[str, dict]) -> PlanConfig
         changes = {}
         for key, value in values.items():
             if key not in known:
-                raise InputError(f"unknown config key {section_name}.{key}")
+                moved = MOVED_KEYS.get(f"{section_name}.{key}")
+                raise InputError(f"unknown config key {section_name}.{key}" + (f" (now {moved})" if moved else ""))
             changes[key] = _coerce(f"{section_name}.{key}", getattr(section, key), known[key], value)
         updated[section_name] = dataclasses.replace(section, **changes)
     return dataclasses.replace(config, **updated)

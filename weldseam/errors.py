@@ -10,7 +10,12 @@ class InputError(WeldseamError):
 
 
 class NoSeamError(WeldseamError):
-    """The scan was read and processed but no weld seam was found in it."""
+    """The scan was read and processed but no weld seam was found in it; `candidates` are what
+    was considered, each with the reason it was rejected (pipeline.candidates.Candidate)."""
+
+    def __init__(self, message: str, candidates: tuple = ()):
+        super().__init__(message)
+        self.candidates = candidates
 
 
 class StageError(WeldseamError):

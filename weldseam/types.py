@@ -79,9 +79,13 @@ class WeldPath:
 
 @dataclass(frozen=True)
 class RunResult:
-    """What one `plan` run produced: the paths plus the record that reproduces them."""
+    """What one `plan` run produced: the paths plus the record that reproduces them, every seam
+    candidate with what became of it (pipeline.candidates.Candidate), and the working cloud with
+    its descriptor values ((M, 3), (M,)), for a report."""
 
     paths: tuple[WeldPath, ...]
     record: dict = field(default_factory=dict)
     timings_s: dict = field(default_factory=dict)
     warnings: tuple[str, ...] = ()
+    candidates: tuple = ()
+    descriptor: tuple | None = None

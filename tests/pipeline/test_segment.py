@@ -33,6 +33,6 @@ def test_clusters_split_far_apart_regions_and_drop_short_ones():
     line_b = line_a + [0, 0.05, 0]
     speck = np.array([[0.2, 0.2, 0.0], [0.201, 0.2, 0.0]])
     points = np.vstack([line_a, line_b, speck])
-    clusters = cluster_candidates(points, np.ones(len(points), bool), tolerance_m=0.006, min_length_m=0.02)
+    clusters, _ = cluster_candidates(points, np.ones(len(points), bool), tolerance_m=0.006, min_length_m=0.02)
     assert sorted(len(c) for c in clusters) == [50, 50]
     assert {tuple(np.unique(points[c][:, 1].round(3))) for c in clusters} == {(0.0,), (0.05,)}

@@ -64,3 +64,10 @@ def _smooth(positions, axes, arc, sigma_m, period):
         weights *= np.abs(distance) <= np.maximum(reach, 1e-12)[:, None] + 1e-12
     weights /= weights.sum(axis=1, keepdims=True)
     return weights @ positions, unit(weights @ axes)
+
+
+def hole_warning(seam_id: int, hole) -> str:
+    """The warning for a stretch of seam `seam_id` interpolated across a hole (trace.Hole)."""
+    x, y, z = hole.middle_m
+    return (f"seam {seam_id}: {hole.length_m * 1000:.0f} mm interpolated across a hole in the scan "
+            f"(no data on the seam) around ({x:.3f}, {y:.3f}, {z:.3f}) m")  # fmt: skip

@@ -1,17 +1,19 @@
-"""The pipeline: the only module that knows the order of the stages.
+"""The pipeline: the only module that knows the order of the steps.
 
-Each stage is timed under its own name (the name of its module and config section); a
-stage that fails is reported with that name.
+STEPS below is the whole chain, read top to bottom. Each step is a module of the same name
+(weldseam/pipeline/NAME.py), whose parameters are the config section of that name where it has
+any; it is timed under its name, its points are written under its name by --dump-stages, and its
+tests are tests/pipeline/test_NAME.py. A step reads what the steps before it left in the
+PlanState and adds its own results; a step that fails is reported with its name.
 """
 
 from __future__ import annotations
 
 import hashlib
-import itertools
 import time
 from collections.abc import Callable, Sequence
-from contextlib import contextmanager
-from dataclasses import replace
+from contextlib import ExitStack, contextmanager
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -19,40 +21,305 @@ from scipy.spatial import cKDTree
 from weldseam import __version__
 from weldseam.config import PlanConfig, config_to_dict
 from weldseam.errors import InputError, NoSeamError, StageError, WeldseamError
-from weldseam.geometry import polyline_length, transform_points, unit
-from weldseam.pipeline.assemble import assemble_seams
-from weldseam.pipeline.boundary import boundary_mask
-from weldseam.pipeline.condition import condition_points, sparse_points
-from weldseam.pipeline.descriptor import gradient_descriptor
-from weldseam.pipeline.grid import voxel_centroids
+from weldseam.geometry import polyline_length, transform_points
+from weldseam.pipeline import boundary, candidates, condition, descriptor, extend, grid, join, normals, order
+from weldseam.pipeline import pairing, probe, resample, segment, smooth, split, support, thinning, trace
 from weldseam.pipeline.merge import merge_frames
+from weldseam.pipeline.candidates import Candidate, Rejection
 from weldseam.pipeline.neighbours import pairs_among, pairs_graph, radius_graph, radius_pairs
-from weldseam.pipeline.normals import estimate_normals
-from weldseam.pipeline.order import order_chains
-from weldseam.pipeline.pairing import pair_midpoints
 from weldseam.pipeline.parallel import in_background, worker_process
-from weldseam.pipeline.resample import resample_seam
-from weldseam.pipeline.section import section_params
-from weldseam.pipeline.segment import automatic_threshold, cluster_candidates
-from weldseam.pipeline.smooth import smooth_points
-from weldseam.pipeline.support import find_support_plane
-from weldseam.pipeline.thinning import thin_points
-from weldseam.pipeline.trace import TracedSeam, inside_traced, probe_chains, trace_chain
+from weldseam.pipeline.section import FineSurface, section_params
 from weldseam.types import RunResult, Scan, WeldPath
 
-STAGES = (
-    "condition", "smooth", "normals", "descriptor", "segment", "boundary",
-    "pairing", "thinning", "grid", "order", "section", "resample",
-)
 MIN_POINTS = 100
-SUPPORT_TOLERANCE_M = 0.002  # how far a point may lie from the table plane and be on it
-SUPPORT_BELOW_FRACTION = 0.05  # share of points allowed beyond the table (noise, outliers)
-ORIGIN_SAMPLE = 200_000  # scan points searched for the camera that saw each working point
 # The fine tree answers the sections' 25 mm balls (~2000 points each): with big leaves and
 # uncompacted nodes it is built in 33 ms instead of 58 and answers 600 balls in 107 ms, not 125.
 FINE_TREE_LEAF_SIZE = 128
 
 Dump = Callable[[str, np.ndarray, np.ndarray | None], None]
+
+
+@dataclass
+class PlanState:
+    """What the steps have found so far (each step's fields are set by it; see STEPS)."""
+
+    scan: Scan
+    config: PlanConfig
+    resources: ExitStack
+    dump: Dump
+    warnings: list[str] = field(default_factory=list)
+    # condition
+    camera: np.ndarray | None = None
+    fine: np.ndarray | None = None
+    fine_tree: object = None
+    working: np.ndarray | None = None
+    working_camera: np.ndarray | None = None
+    graphs: dict = field(default_factory=dict)
+    # normals, descriptor, segment, support
+    normals: np.ndarray | None = None
+    descriptor: np.ndarray | None = None
+    threshold: float | None = None
+    clusters: list = field(default_factory=list)
+    working_tree: object = None
+    support: tuple | None = None
+    # boundary, pairing, thinning, grid, order
+    rims: list = field(default_factory=list)
+    centre_points: list = field(default_factory=list)
+    chains: list = field(default_factory=list)
+    chain_cluster: list = field(default_factory=list)
+    # probe, trace, join, extend, split
+    surface: FineSurface | None = None
+    approx_axes: list = field(default_factory=list)
+    probes: list = field(default_factory=list)
+    seams: list = field(default_factory=list)
+    holes: list = field(default_factory=list)
+    short_candidates: list[Candidate] = field(default_factory=list)
+    chain_candidates: list[Candidate] = field(default_factory=list)
+    # resample
+    paths: list[WeldPath] = field(default_factory=list)
+
+    def neighbourhoods(self, radius_m: float):
+        """One radius graph of the working cloud per distinct radius: smoothing moves points by
+        well under a voxel, so the neighbourhoods found before it still hold after it."""
+        if radius_m not in self.graphs:
+            self.graphs[radius_m] = radius_graph(self.working, radius_m)
+        return self.graphs[radius_m]
+
+
+def _condition(state: PlanState, c: PlanConfig) -> None:
+    """Finite points in the crop box merged into fine voxels (the surface the sections read) and
+    working voxels (the neighbourhood steps), isolated working points dropped."""
+    scan = state.scan
+    state.fine = condition.condition_points(
+        scan.points_m, voxel_m=c.condition.voxel_m, crop_min_m=c.condition.crop_min_m, crop_max_m=c.condition.crop_max_m
+    )
+    if len(state.fine) < MIN_POINTS:
+        raise InputError(f"{scan.source}: only {len(state.fine)} valid points (finite, inside the crop box)")
+    # The sections' search tree over the fine cloud is built on the other core meanwhile.
+    state.fine_tree = in_background(
+        cKDTree, state.fine, balanced_tree=False, compact_nodes=False, leafsize=FINE_TREE_LEAF_SIZE
+    )
+    working = grid.voxel_centroids(state.fine, c.condition.working_voxel_m)
+    # Isolated points go before any neighbourhood statistics; their pairs go with them.
+    pairs = radius_pairs(working, c.normals.radius_m)
+    outliers = condition.sparse_points(pairs, len(working), min_fraction=c.condition.outlier_fraction)
+    if outliers.any():
+        pairs = pairs_among(pairs, ~outliers)
+        working = working[~outliers]
+    state.working = working
+    state.graphs = {c.normals.radius_m: pairs_graph(pairs, len(working))}
+    state.camera, state.working_camera = normals.camera_origins(scan, working, state.warnings)
+    state.dump("condition", state.fine, None)
+
+
+def _smooth(state: PlanState, c: PlanConfig) -> None:
+    if c.smooth.enabled:
+        state.working = smooth.smooth_points(
+            state.working, state.neighbourhoods(c.smooth.radius_m), radius_m=c.smooth.radius_m,
+            range_sigma_m=c.smooth.range_sigma_m,
+        )
+    state.dump("smooth", state.working, None)
+
+
+def _normals(state: PlanState, c: PlanConfig) -> None:
+    graph = state.neighbourhoods(c.normals.radius_m)
+    state.normals = normals.estimate_normals(state.working, graph, camera_origin_m=state.working_camera)
+
+
+def _descriptor(state: PlanState, c: PlanConfig) -> None:
+    graph = state.neighbourhoods(c.descriptor.radius_m)
+    state.descriptor = descriptor.gradient_descriptor(state.normals, graph, variant=c.descriptor.variant)
+    state.dump("descriptor", state.working, state.descriptor)
+
+
+def _segment(state: PlanState, c: PlanConfig) -> None:
+    """Points bending more than the automatic threshold (or segment.threshold), clustered into
+    candidates; clusters too short are recorded as rejected."""
+    state.threshold = c.segment.threshold
+    if state.threshold is None:
+        state.threshold = segment.automatic_threshold(
+            spacing_m=c.condition.working_voxel_m, normals_radius_m=c.normals.radius_m,
+            descriptor_radius_m=c.descriptor.radius_m, variant=c.descriptor.variant,
+            min_crease_deg=c.segment.min_crease_deg,
+        )
+    state.clusters, short = segment.cluster_candidates(
+        state.working, state.descriptor > state.threshold,
+        tolerance_m=c.segment.cluster_tolerance_m, min_length_m=c.segment.min_seam_length_m,
+    )
+    state.short_candidates = [replace(_cluster_candidate(state.working[members]), rejection=Rejection.TOO_SHORT)
+                              for members in short]  # fmt: skip
+    state.working_tree = cKDTree(state.working)
+    state.dump("segment", state.working[np.concatenate(state.clusters)] if state.clusters else np.empty((0, 3)), None)
+
+
+def _support(state: PlanState, c: PlanConfig) -> None:
+    """The table under the part (the largest plane of unbent points that nothing lies beyond), and
+    the traced corners on it dropped: there a part rests on the table."""
+    if not c.support.enabled:
+        return
+    state.support = support.find_support_plane(
+        state.working, state.descriptor <= state.threshold, state.working_camera,
+        tolerance_m=c.support.tolerance_m, below_fraction=c.support.below_fraction,
+    )
+    kept = support.off_support(state.seams, state.support, c.support.tolerance_m)
+    _reject_lost(state, state.seams, kept, Rejection.ON_SUPPORT)
+    state.seams = kept
+
+
+def _boundary(state: PlanState, c: PlanConfig) -> None:
+    for members in state.clusters:
+        band = state.working[members]
+        rim = band[boundary.boundary_mask(
+            band, state.normals[members], radius_m=c.boundary.radius_m, shift_ratio=c.boundary.shift_ratio
+        )]
+        state.rims.append(rim)
+        state.dump("boundary", rim, None)
+
+
+def _pairing(state: PlanState, c: PlanConfig) -> None:
+    """Rim points paired across each band, their midpoints the candidate's centre points (the
+    band itself where it is too narrow to pair)."""
+    for members, rim in zip(state.clusters, state.rims):
+        in_cluster = np.zeros(len(state.working), dtype=bool)
+        in_cluster[members] = True
+
+        def in_band(points: np.ndarray, in_cluster=in_cluster) -> np.ndarray:
+            return in_cluster[state.working_tree.query(points, workers=-1)[1]]
+
+        midpoints, _ = pairing.pair_midpoints(
+            rim, tangent_radius_m=c.boundary.radius_m, angle_tolerance_deg=c.pairing.angle_tolerance_deg,
+            max_width_m=c.pairing.max_width_m, width_tolerance=c.pairing.width_tolerance, in_band=in_band,
+        )
+        if len(midpoints) < 5:  # no rim pairs (a narrow band): thin the band itself
+            midpoints = state.working[members]
+        state.centre_points.append(midpoints)
+        state.dump("pairing", midpoints, None)
+
+
+def _thinning(state: PlanState, c: PlanConfig) -> None:
+    # All candidates at once: see thin_points.
+    state.centre_points = thinning.thin_points(
+        state.centre_points, radius_m=c.thinning.radius_m, iterations=c.thinning.iterations
+    )
+    for thinned in state.centre_points:
+        state.dump("thinning", thinned, None)
+
+
+def _grid(state: PlanState, c: PlanConfig) -> None:
+    state.centre_points = [grid.voxel_centroids(thinned, c.grid.leaf_m) for thinned in state.centre_points]
+
+
+def _order(state: PlanState, c: PlanConfig) -> None:
+    for k, nodes in enumerate(state.centre_points):
+        found = order.order_chains(nodes, link_m=c.order.link_m, min_branch_m=c.order.min_branch_m)
+        state.chains += found
+        state.chain_cluster += [k] * len(found)
+    for chain in state.chains:
+        state.dump("order", chain.points, None)
+
+
+def _probe(state: PlanState, c: PlanConfig) -> None:
+    """A few sections on every chain (the first step on the fine surface: the worker process
+    that shares its sections starts here and stays until the run ends)."""
+    state.surface = FineSurface(state.fine, state.fine_tree.result(), section_params(c))
+    state.resources.enter_context(worker_process(state.surface))
+    state.approx_axes = probe.approximate_torch_axes(
+        [chain.points for chain in state.chains], state.normals, state.working_tree, c.joints.face_radius_m
+    )
+    state.probes = probe.probe_chains(state.chains, state.approx_axes, state.surface)
+
+
+def _trace(state: PlanState, c: PlanConfig) -> None:
+    """Longest chains first, each probed chain traced; a chain within face_radius / 2 of the
+    opening of a groove traced before is skipped. The pieces are then taken in chain order."""
+    chains = state.chains
+    by_length = sorted(range(len(chains)), key=lambda k: -polyline_length(chains[k].points))
+    pieces: dict[int, list[trace.TracedSeam]] = {}
+    traced_so_far: list[trace.TracedSeam] = []
+    rejected: dict[int, Rejection] = {}
+    for k in by_length:
+        if not any(fit.kind is not None for fit in state.probes[k].values()):
+            rejected[k] = Rejection.NO_JOINT
+        elif trace.inside_traced(chains[k].points, traced_so_far, c.joints.face_radius_m / 2):
+            rejected[k] = Rejection.INSIDE_SEAM
+        else:
+            found = trace.trace_chain(chains[k], state.approx_axes[k], state.probes[k], state.surface, c.trace)
+            pieces[k] = [replace(seam, sources=frozenset({k})) for seam in found]
+            traced_so_far += pieces[k]
+            if not found:
+                rejected[k] = Rejection.TOO_FEW_FITS
+    state.seams = [seam for k in sorted(pieces) for seam in pieces[k]]
+    state.chain_candidates = [_chain_candidate(state, k, rejected.get(k)) for k in range(len(chains))]
+    _dump_seams(state, "trace")
+
+
+def _join(state: PlanState, c: PlanConfig) -> None:
+    state.seams = join.join_seams(state.seams, c.join)
+    _dump_seams(state, "join")
+
+
+def _extend(state: PlanState, c: PlanConfig) -> None:
+    state.seams = extend.extend_seams(state.seams, state.surface, c.extend)
+    state.holes = [hole for seam in state.seams for hole in seam.holes]
+    _dump_seams(state, "extend")
+
+
+def _split(state: PlanState, c: PlanConfig) -> None:
+    final = split.split_seams(state.seams, state.holes, c.split, c.extend.step_m)
+    _reject_lost(state, state.seams, final, Rejection.FRAGMENT)
+    state.seams = final
+    _dump_seams(state, "split")
+
+
+def _resample(state: PlanState, c: PlanConfig) -> None:
+    """Poses every resample.spacing_m along each seam; a warning for each hole crossed."""
+    for seam in state.seams:
+        positions, rotations = resample.resample_seam(
+            seam.positions_m, seam.torch_axes, spacing_m=c.resample.spacing_m,
+            smoothing_m=c.resample.smoothing_m, closed=seam.closed,
+        )
+        seam_id = len(state.paths)
+        state.warnings += [resample.hole_warning(seam_id, hole) for hole in seam.holes]
+        state.paths.append(WeldPath(
+            seam_id=seam_id, positions_m=positions, rotations=rotations, closed=seam.closed,
+            joint=seam.joint.value, confidence=seam.confidence,
+        ))
+    state.chain_candidates = [
+        replace(candidate, seam=next((k for k, seam in enumerate(state.seams) if index in seam.sources), None))
+        if candidate.rejection is None else candidate
+        for index, candidate in enumerate(state.chain_candidates)
+    ]
+    if state.paths:
+        state.dump("resample", np.vstack([p.positions_m for p in state.paths]), None)
+
+
+@dataclass(frozen=True)
+class Step:
+    name: str
+    run: Callable[[PlanState, PlanConfig], None]
+
+
+STEPS = (
+    Step("condition", _condition),
+    Step("smooth", _smooth),
+    Step("normals", _normals),
+    Step("descriptor", _descriptor),
+    Step("segment", _segment),
+    Step("boundary", _boundary),
+    Step("pairing", _pairing),
+    Step("thinning", _thinning),
+    Step("grid", _grid),
+    Step("order", _order),
+    Step("probe", _probe),
+    Step("trace", _trace),
+    Step("support", _support),
+    Step("join", _join),
+    Step("extend", _extend),
+    Step("join", _join),  # extensions may meet
+    Step("split", _split),
+    Step("resample", _resample),
+)
+STAGES = tuple(dict.fromkeys(step.name for step in STEPS))  # the timing keys, in order
 
 
 @contextmanager
@@ -80,193 +347,36 @@ def plan_paths(
     on_stage: Callable[[str], None] | None = None,
     allow_empty: bool = False,
 ) -> RunResult:
-    """Run every stage on `scan` and return the welding paths with the run's record.
+    """Run every step on `scan` and return the welding paths with the run's record.
 
-    `dump(stage, points, values)` receives each stage's points (for --dump-stages);
-    `on_stage(name)` is called as each stage starts (for progress). Raises NoSeamError
+    `dump(step, points, values)` receives each step's points (for --dump-stages);
+    `on_stage(name)` is called as each step starts (for progress). Raises NoSeamError
     when nothing is found, unless `allow_empty`.
     """
     timings: dict[str, float] = {name: 0.0 for name in STAGES}
-    warnings: list[str] = []
-
-    def stage(name: str):
-        return _stage(name, timings, on_stage)
-
-    def emit(name: str, points: np.ndarray, values: np.ndarray | None = None) -> None:
-        if dump is not None:
-            dump(name, points, values)
-
-    camera = None if scan.camera_origin_m is None else np.asarray(scan.camera_origin_m, dtype=np.float64)
-    if camera is None:
-        finite = scan.points_m[np.isfinite(scan.points_m).all(axis=1)]
-        camera = (finite.mean(axis=0) if len(finite) else np.zeros(3)) + np.array([0.0, 0.0, 1.0])
-        warnings.append("no camera origin given: normals oriented toward +z (a camera above the part)")
-
-    c = config
-    with stage("condition"):
-        fine = condition_points(
-            scan.points_m, voxel_m=c.condition.voxel_m, crop_min_m=c.condition.crop_min_m,
-            crop_max_m=c.condition.crop_max_m,
+    with ExitStack() as resources:
+        state = PlanState(scan, config, resources, dump or (lambda *_: None))
+        for step in STEPS:
+            with _stage(step.name, timings, on_stage):
+                step.run(state, config)
+    found = [*state.short_candidates, *state.chain_candidates]
+    if not state.paths and not allow_empty:
+        rejected = [c for c in found if c.rejection is not None]
+        reasons = f": {candidates.commonest_reasons(rejected)}" if rejected else ""
+        raise NoSeamError(
+            f"{scan.source or 'scan'}: no weld seam found ({len(rejected)} candidate(s) rejected{reasons})",
+            tuple(found),
         )
-        if len(fine) < MIN_POINTS:
-            raise InputError(f"{scan.source}: only {len(fine)} valid points (finite, inside the crop box)")
-        # The sections' search tree over the fine cloud is built on the other core meanwhile.
-        fine_tree_building = in_background(
-            cKDTree, fine, balanced_tree=False, compact_nodes=False, leafsize=FINE_TREE_LEAF_SIZE
-        )
-        working = voxel_centroids(fine, c.condition.working_voxel_m)
-        # Isolated points go before any neighbourhood statistics; their pairs go with them.
-        pairs = radius_pairs(working, c.normals.radius_m)
-        outliers = sparse_points(pairs, len(working), min_fraction=c.condition.outlier_fraction)
-        if outliers.any():
-            pairs = pairs_among(pairs, ~outliers)
-            working = working[~outliers]
-        graphs = {c.normals.radius_m: pairs_graph(pairs, len(working))}
-    emit("condition", fine)
-
-    def neighbourhoods(radius_m: float):
-        """One radius graph per distinct radius: smoothing moves points by well under a
-        voxel, so the neighbourhoods found before it still hold after it."""
-        if radius_m not in graphs:
-            graphs[radius_m] = radius_graph(working, radius_m)
-        return graphs[radius_m]
-
-    working_camera = camera
-    if camera.shape not in ((3,), scan.points_m.shape):
-        raise InputError(f"{scan.source}: camera_origin_m must be (3,) or one (3,) per point, got {camera.shape}")
-    if camera.ndim == 2:  # one origin per scan point (merged frames)
-        with stage("merge"):
-            working_camera = _nearest_origins(scan.points_m, camera, working)
-    with stage("smooth"):
-        if c.smooth.enabled:
-            working = smooth_points(
-                working, neighbourhoods(c.smooth.radius_m), radius_m=c.smooth.radius_m,
-                range_sigma_m=c.smooth.range_sigma_m,
-            )
-    emit("smooth", working)
-    with stage("normals"):
-        normals = estimate_normals(working, neighbourhoods(c.normals.radius_m), camera_origin_m=working_camera)
-    with stage("descriptor"):
-        descriptor = gradient_descriptor(normals, neighbourhoods(c.descriptor.radius_m), variant=c.descriptor.variant)
-    emit("descriptor", working, descriptor)
-    with stage("segment"):
-        threshold = c.segment.threshold
-        if threshold is None:
-            threshold = automatic_threshold(
-                spacing_m=c.condition.working_voxel_m, normals_radius_m=c.normals.radius_m,
-                descriptor_radius_m=c.descriptor.radius_m, variant=c.descriptor.variant,
-                min_crease_deg=c.segment.min_crease_deg,
-            )
-        clusters = cluster_candidates(
-            working, descriptor > threshold,
-            tolerance_m=c.segment.cluster_tolerance_m, min_length_m=c.segment.min_seam_length_m,
-        )
-        support = None
-        if c.section.ignore_support_corners:
-            support = find_support_plane(
-                working, descriptor <= threshold, working_camera, tolerance_m=SUPPORT_TOLERANCE_M,
-                below_fraction=SUPPORT_BELOW_FRACTION,
-            )
-    emit("segment", working[np.concatenate(clusters)] if clusters else np.empty((0, 3)))
-    working_tree = cKDTree(working)
-
-    params = section_params(c.section, c.condition.voxel_m)
-    centre_points = []  # per candidate, the points thinned onto its centre line
-    for members in clusters:
-        in_cluster = np.zeros(len(working), dtype=bool)
-        in_cluster[members] = True
-
-        def in_band(points: np.ndarray, in_cluster=in_cluster) -> np.ndarray:
-            return in_cluster[working_tree.query(points, workers=-1)[1]]
-
-        band, band_normals = working[members], normals[members]
-        with stage("boundary"):
-            rim = band[boundary_mask(
-                band, band_normals, radius_m=c.boundary.radius_m, shift_ratio=c.boundary.shift_ratio
-            )]
-        emit("boundary", rim)
-        with stage("pairing"):
-            midpoints, _ = pair_midpoints(
-                rim, tangent_radius_m=c.boundary.radius_m, angle_tolerance_deg=c.pairing.angle_tolerance_deg,
-                max_width_m=c.pairing.max_width_m, width_tolerance=c.pairing.width_tolerance, in_band=in_band,
-            )
-            if len(midpoints) < 5:  # no rim pairs (a narrow band): thin the band itself
-                midpoints = band
-        emit("pairing", midpoints)
-        centre_points.append(midpoints)
-    with stage("thinning"):  # all candidates at once: see thin_points
-        centre_points = thin_points(centre_points, radius_m=c.thinning.radius_m, iterations=c.thinning.iterations)
-    chains = []
-    for thinned in centre_points:
-        emit("thinning", thinned)
-        with stage("grid"):
-            nodes = voxel_centroids(thinned, c.grid.leaf_m)
-        with stage("order"):
-            chains += order_chains(nodes, link_m=c.order.link_m, min_branch_m=c.order.min_branch_m)
-    with stage("section"):
-        fine_tree = fine_tree_building.result()
-        with worker_process(fine, fine_tree):
-            # Longest chains first; a chain within face_radius / 2 of the opening of a groove traced
-            # before is skipped (fit_section takes that as the groove's reach). The pieces are then
-            # taken in chain order, as found.
-            by_length = sorted(range(len(chains)), key=lambda k: -polyline_length(chains[k].points))
-            approx_axes = _approximate_torch_axes(
-                [chain.points for chain in chains], normals, working_tree, c.section.face_radius_m
-            )
-            probes = probe_chains(chains, approx_axes, fine, fine_tree, params)
-            pieces: dict[int, list[TracedSeam]] = {}
-            traced_so_far: list[TracedSeam] = []
-            for k in by_length:
-                fitted = any(fit.joint for fit in probes[k].values())
-                if not fitted or inside_traced(chains[k].points, traced_so_far, c.section.face_radius_m / 2):
-                    continue
-                pieces[k] = trace_chain(
-                    chains[k], approx_axes[k], probes[k], fine, fine_tree,
-                    step_m=c.resample.spacing_m, max_gap_m=c.section.max_gap_m,
-                    min_valid_fraction=c.section.min_valid_fraction, section_params=params,
-                )
-                traced_so_far += pieces[k]
-            traced = [seam for k in sorted(pieces) for seam in pieces[k]]
-            seams = assemble_seams(
-                traced, fine, fine_tree, support=support, support_tolerance_m=SUPPORT_TOLERANCE_M,
-                overlap_m=c.order.overlap_m, join_m=c.order.join_m, max_turn_deg=c.order.max_join_turn_deg,
-                min_branch_m=c.order.min_branch_m, min_seam_length_m=c.segment.min_seam_length_m,
-                step_m=c.resample.spacing_m, max_gap_m=c.section.max_gap_m,
-                max_extension_m=c.section.max_extension_m, max_hole_m=c.section.max_hole_m,
-                section_params=params,
-            )
-    paths = []
-    with stage("resample"):
-        for seam in seams:
-            positions, rotations = resample_seam(
-                seam.positions_m, seam.torch_axes, spacing_m=c.resample.spacing_m,
-                smoothing_m=c.resample.smoothing_m, closed=seam.closed,
-            )
-            warnings += [
-                f"seam {len(paths)}: {hole.length_m * 1000:.0f} mm interpolated across a hole in the scan "
-                f"(no data on the seam) around ({hole.middle_m[0]:.3f}, {hole.middle_m[1]:.3f}, "
-                f"{hole.middle_m[2]:.3f}) m"
-                for hole in seam.holes
-            ]
-            paths.append(
-                WeldPath(
-                    seam_id=len(paths), positions_m=positions, rotations=rotations,
-                    closed=seam.closed, joint=seam.joint, confidence=seam.confidence,
-                )
-            )
-    if paths:
-        emit("path", np.vstack([p.positions_m for p in paths]))
-    if not paths and not allow_empty:
-        raise NoSeamError(f"{scan.source or 'scan'}: no weld seam found ({len(clusters)} candidate(s) rejected)")
     record = {
         "weldseam_version": __version__,
         "input": {"path": scan.source, "sha256": scan.sha256, "points": int(len(scan.points_m))},
-        "camera_origin_m": np.round(_distinct_rows(camera), 9).tolist() if camera.ndim == 2
-        else [round(float(v), 9) for v in camera],
-        "threshold": float(threshold),
+        "camera_origin_m": normals.camera_record(state.camera),
+        "threshold": float(state.threshold),
         "params": config_to_dict(config),
+        "candidates": [c.as_record() for c in found],
     }
-    return RunResult(paths=tuple(paths), record=record, timings_s=timings, warnings=tuple(warnings))
+    return RunResult(paths=tuple(state.paths), record=record, timings_s=timings, warnings=tuple(state.warnings),
+                     candidates=tuple(found), descriptor=(state.working, state.descriptor))  # fmt: skip
 
 
 def plan_frames(
@@ -325,33 +435,30 @@ def plan_frames(
     )
 
 
-def _nearest_origins(points: np.ndarray, origins: np.ndarray, queries: np.ndarray) -> np.ndarray:
-    """(Q, 3) camera origin of the scan point nearest each query, among an even subsample of at
-    most ORIGIN_SAMPLE finite points (merged frames own whole 3 mm voxels, so a point ~1 mm
-    away belongs to a camera that saw the same surface; any such camera orients it)."""
-    finite = np.flatnonzero(np.isfinite(points).all(axis=1))
-    finite = finite[:: max(1, -(-len(finite) // ORIGIN_SAMPLE))]
-    tree = cKDTree(points[finite], balanced_tree=False, compact_nodes=False)
-    return origins[finite[tree.query(queries, workers=-1)[1]]]
+def _cluster_candidate(points: np.ndarray) -> Candidate:
+    """A Candidate for a cluster of working points: its mean and its extent along its principal axis."""
+    centred = points - points.mean(axis=0)
+    axis = np.linalg.svd(centred, full_matrices=False)[2][0]
+    centre = points.mean(axis=0)
+    return Candidate(tuple(round(float(v), 6) for v in centre), float(np.ptp(centred @ axis)))
 
 
-def _distinct_rows(rows: np.ndarray) -> np.ndarray:
-    """The rows of (N, 3) `rows` where they change from the previous row (runs collapsed), in order."""
-    changes = np.r_[True, np.any(rows[1:] != rows[:-1], axis=1)]
-    return rows[changes]
+def _chain_candidate(state: PlanState, k: int, rejection: Rejection | None) -> Candidate:
+    chain = state.chains[k]
+    found = candidates.candidate_of(chain.points, chain.closed)
+    if rejection is Rejection.NO_JOINT:
+        reasons = {fit.reason for fit in state.probes[k].values()}
+        return replace(found, rejection=rejection, detail="; ".join(sorted(reasons)))
+    return replace(found, rejection=rejection)
 
 
-def _approximate_torch_axes(centres: list[np.ndarray], normals, tree, radius_m) -> list[np.ndarray]:
-    """For each (K, 3) array of `centres`, the negated mean normal of the surface within
-    `radius_m` of each centre: the plate normal beside a groove, the bisector of the faces at a
-    corner; pointing into the work. One search for all (each search starts its own threads)."""
-    if not centres:
-        return []
-    everywhere = np.concatenate(centres)
-    neighbourhoods = tree.query_ball_point(everywhere, radius_m, workers=-1)
-    counts = np.fromiter(map(len, neighbourhoods), np.intp, len(neighbourhoods))
-    members = np.fromiter(itertools.chain.from_iterable(neighbourhoods), np.intp, counts.sum())
-    owner = np.repeat(np.arange(len(everywhere)), counts)
-    # bincount adds each centre's normals in member order, as a sum over them would.
-    sums = np.column_stack([np.bincount(owner, normals[members, k], len(everywhere)) for k in range(3)])
-    return np.split(unit(-sums), np.cumsum([len(c) for c in centres])[:-1])
+def _reject_lost(state: PlanState, before, after, rejection: Rejection) -> None:
+    """Mark the candidates that `before` traced and `after` no longer does as rejected so."""
+    lost = set().union(*(s.sources for s in before)) - set().union(*(s.sources for s in after))
+    for k in sorted(lost):
+        state.chain_candidates[k] = replace(state.chain_candidates[k], rejection=rejection)
+
+
+def _dump_seams(state: PlanState, name: str) -> None:
+    for seam in state.seams:
+        state.dump(name, seam.positions_m, None)

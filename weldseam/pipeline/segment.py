@@ -36,18 +36,22 @@ def automatic_threshold(
 
 def cluster_candidates(
     points: np.ndarray, selected: np.ndarray, *, tolerance_m: float, min_length_m: float
-) -> list[np.ndarray]:
-    """Euclidean clusters of the selected points (indices into `points`), largest first,
-    keeping those whose longest extent (along their principal axis) reaches `min_length_m`."""
+) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """Euclidean clusters of the selected points (indices into `points`): those whose longest
+    extent (along their principal axis) reaches `min_length_m`, largest first, and those too
+    short (extent at least `tolerance_m`: smaller specks are not candidates at all)."""
     indices = np.flatnonzero(selected)
     if len(indices) == 0:
-        return []
+        return [], []
     _, labels = connected_components(radius_graph(points[indices], tolerance_m), directed=False)
-    clusters = []
+    clusters, short = [], []
     for label in np.unique(labels):
         members = indices[labels == label]
         centred = points[members] - points[members].mean(axis=0)
         axis = np.linalg.svd(centred, full_matrices=False)[2][0] if len(members) > 1 else np.zeros(3)
-        if len(members) > 1 and np.ptp(centred @ axis) >= min_length_m:
+        extent = np.ptp(centred @ axis) if len(members) > 1 else 0.0
+        if extent >= min_length_m:
             clusters.append(members)
-    return sorted(clusters, key=lambda members: (-len(members), int(members[0])))
+        elif extent >= tolerance_m:
+            short.append(members)
+    return sorted(clusters, key=lambda members: (-len(members), int(members[0]))), short

@@ -1,8 +1,12 @@
-"""The support plane: the table the workpiece rests on, if the scan shows one."""
+"""The support plane: the table the workpiece rests on, if the scan shows one, and the rule that
+what a part forms with it is not a joint."""
 
 from __future__ import annotations
 
 import numpy as np
+
+from weldseam.pipeline.joints import JointKind
+from weldseam.pipeline.trace import TracedSeam
 
 RANSAC_TRIALS = 200
 COUNT_SAMPLE = 5000
@@ -44,3 +48,17 @@ def find_support_plane(
         normal = -normal
     beyond = (points - centre) @ normal < -tolerance_m
     return (centre, normal) if beyond.mean() <= below_fraction else None
+
+
+def off_support(seams: list[TracedSeam], support, tolerance_m: float) -> list[TracedSeam]:
+    """The seams that are not fillets on the support plane (`support` = (point, normal) or
+    None): there a part stands on the table. A fillet lies on it when the median distance of its
+    points from the plane is at most `tolerance_m`."""
+    if support is None:
+        return seams
+    centre, normal = support
+    return [
+        seam
+        for seam in seams
+        if seam.joint != JointKind.FILLET or np.median(np.abs((seam.positions_m - centre) @ normal)) > tolerance_m
+    ]

@@ -1,9 +1,9 @@
-"""Assembly: from every chain's traced pieces to the final seams.
+"""Join: pieces of one seam trimmed where they overlap, joined end to end, loops closed.
 
-Several chains often trace the same seam, each a little further than the others, and a
-seam often comes out in pieces (holes in the scan, junctions in the candidate band). The
-pieces are trimmed where they overlap, joined end to end, extended to the seam's ends,
-joined again, and split at T/Y junctions into one seam per branch.
+Several chains often trace the same seam, each a little further than the others, and a seam often
+comes out in pieces (holes in the scan, junctions in the candidate band). Longest first, each
+stretch of seam is kept once; open pieces whose ends face each other are joined (never three ends
+meeting at a junction); a piece whose own ends meet is a closed loop.
 """
 
 from __future__ import annotations
@@ -13,79 +13,19 @@ from dataclasses import replace
 import numpy as np
 from scipy.spatial import cKDTree
 
+from weldseam.config import JoinConfig
 from weldseam.geometry import bend_corner, polyline_length, unit
-from weldseam.pipeline.section import FILLET, SectionParams
-from weldseam.pipeline.trace import END_BASELINE_M, Hole, TracedSeam, end_direction, extend_seams, seam_length
+from weldseam.pipeline.ends import END_BASELINE_M, end_direction
+from weldseam.pipeline.trace import TracedSeam
 
 
-def assemble_seams(
-    traced: list[TracedSeam],
-    points: np.ndarray,
-    tree,
-    *,
-    support,
-    support_tolerance_m: float,
-    overlap_m: float,
-    join_m: float,
-    max_turn_deg: float,
-    min_branch_m: float,
-    min_seam_length_m: float,
-    step_m: float,
-    max_gap_m: float,
-    max_extension_m: float,
-    max_hole_m: float,
-    section_params: SectionParams,
-) -> list[TracedSeam]:
-    """The final seams from every chain's traces: fillets on the support plane dropped,
-    overlaps trimmed, pieces joined, open ends extended (then trimmed and joined again,
-    since extensions may meet), fragments dropped, T/Y junctions split."""
+def join_seams(seams: list[TracedSeam], params: JoinConfig) -> list[TracedSeam]:
+    """The seams trimmed where they overlap, joined, and trimmed again (a join may bridge onto a
+    stretch another piece also covers)."""
+    joined = join_pieces(trim_overlaps(seams, tolerance_m=params.overlap_m), join_m=params.join_m,
+                         max_turn_deg=params.max_turn_deg)  # fmt: skip
+    return trim_overlaps(joined, tolerance_m=params.overlap_m)
 
-    def trimmed_and_joined(seams: list[TracedSeam]) -> list[TracedSeam]:
-        joined = join_pieces(trim_overlaps(seams, tolerance_m=overlap_m), join_m=join_m, max_turn_deg=max_turn_deg)
-        return trim_overlaps(joined, tolerance_m=overlap_m)
-
-    seams = trimmed_and_joined(off_support(traced, support, support_tolerance_m))
-    extended = extend_seams(
-        seams, points, tree, step_m=step_m, max_gap_m=max_gap_m, max_extension_m=max_extension_m,
-        max_hole_m=max_hole_m, section_params=section_params,
-    )
-    seams = trimmed_and_joined(extended)
-    # Fragments that joined nothing are noise, and a piece too short to be a seam is no branch:
-    # neither may split a real seam (it would be dropped after splitting it).
-    seams = [seam for seam in seams if seam_length(seam) >= max(min_branch_m, min_seam_length_m)]
-    seams = split_at_junctions(seams, tolerance_m=join_m / 2)
-    holes = [hole for seam in extended for hole in seam.holes]
-    return [_with_holes(seam, holes, step_m) for seam in seams if seam_length(seam) >= min_seam_length_m]
-
-
-def _with_holes(seam: TracedSeam, holes: list[Hole], step_m: float) -> TracedSeam:
-    """The seam with the holes (crossed by any extension) whose middle lies on it, within a step
-    of one of its points. Pieces of one seam often cross the same hole: longest first, a hole whose
-    middle lies within half a kept one's length of that one's middle is the same hole."""
-    if not holes:
-        return seam
-    seam_tree = cKDTree(seam.positions_m)
-    kept: list[Hole] = []
-    for hole in sorted(holes, key=lambda h: (-h.length_m, h.middle_m)):
-        middle = np.array(hole.middle_m)
-        if seam_tree.query(middle)[0] > step_m:
-            continue
-        if all(np.linalg.norm(middle - np.array(other.middle_m)) > other.length_m / 2 for other in kept):
-            kept.append(hole)
-    return replace(seam, holes=tuple(kept))
-
-
-def off_support(seams: list[TracedSeam], support, tolerance_m: float) -> list[TracedSeam]:
-    """The seams that are not fillets on the support plane (`support` = (point, normal) or
-    None): there a part stands on the table."""
-    if support is None:
-        return seams
-    centre, normal = support
-    return [
-        seam
-        for seam in seams
-        if seam.joint != FILLET or np.median(np.abs((seam.positions_m - centre) @ normal)) > tolerance_m
-    ]
 
 def trim_overlaps(seams: list[TracedSeam], *, tolerance_m: float) -> list[TracedSeam]:
     """Keep each stretch of seam once: several chains often trace the same seam, each a
@@ -100,17 +40,20 @@ def trim_overlaps(seams: list[TracedSeam], *, tolerance_m: float) -> list[Traced
         kept.append(piece)
         kept_trees.append(cKDTree(_densified(piece.positions_m, piece.closed, tolerance_m / 2)))
 
-    for seam in sorted(seams, key=lambda s: (-seam_length(s), tuple(s.positions_m[0]))):
-        covered = np.zeros(len(seam.positions_m), bool)
-        for tree in kept_trees:
-            covered |= tree.query(seam.positions_m)[0] <= tolerance_m
+    for seam in sorted(seams, key=lambda s: (-s.length_m, tuple(s.positions_m[0]))):
+        covered_by = [tree.query(seam.positions_m)[0] <= tolerance_m for tree in kept_trees]
+        covered = np.logical_or.reduce(covered_by) if covered_by else np.zeros(len(seam.positions_m), bool)
         if not covered.any():
             keep(seam)
             continue
+        # The seam that covers most of it was traced from its candidates too.
+        owner = int(np.argmax([np.count_nonzero(c) for c in covered_by]))
+        kept[owner] = replace(kept[owner], sources=kept[owner].sources | seam.sources)
         runs = np.split(np.flatnonzero(~covered), np.flatnonzero(np.diff(np.flatnonzero(~covered)) > 1) + 1)
         for run in runs:
             if len(run) >= 2:
-                keep(TracedSeam(seam.positions_m[run], seam.torch_axes[run], False, seam.joint, seam.confidence))
+                keep(TracedSeam(seam.positions_m[run], seam.torch_axes[run], False, seam.joint, seam.confidence,
+                                 sources=seam.sources))
     return kept
 
 
@@ -123,6 +66,7 @@ def _densified(points: np.ndarray, closed: bool, step_m: float) -> np.ndarray:
     starts, ends = points[:-1], points[1:]
     dense = [start + np.outer(f, end - start) for start, end, f in zip(starts, ends, fractions)]
     return np.vstack([*dense, points[-1:]]) if dense else points
+
 
 def join_pieces(seams: list[TracedSeam], *, join_m: float, max_turn_deg: float) -> list[TracedSeam]:
     """Join pieces of one seam and close loops.
@@ -155,6 +99,7 @@ def join_pieces(seams: list[TracedSeam], *, join_m: float, max_turn_deg: float) 
         pieces[i] = merged
         pieces.pop(j)
     return [_closed_if_ends_meet(piece, join_m, cos_along) for piece in pieces]
+
 
 def _joined(
     first: TracedSeam, second: TracedSeam, join_m: float, cos_turn: float, cos_along: float, others: list[TracedSeam]
@@ -196,34 +141,10 @@ def _joined(
                 closed=False,
                 joint=first.joint,
                 confidence=round(weight * first.confidence + (1 - weight) * second.confidence, 3),
+                sources=first.sources | second.sources,
             ))
     return best
 
-
-def split_at_junctions(seams: list[TracedSeam], *, tolerance_m: float) -> list[TracedSeam]:
-    """Split a seam where another seam ends on its interior (a T or Y junction): each
-    branch becomes its own seam, meeting at the junction."""
-    result = list(seams)
-    changed = True
-    while changed:
-        changed = False
-        for index, seam in enumerate(result):
-            if len(seam.positions_m) < 4:
-                continue
-            ends = [piece.positions_m[k] for other, piece in enumerate(result) if other != index for k in (0, -1)]
-            if not ends:
-                continue
-            distance, nearest = cKDTree(seam.positions_m).query(np.array(ends))
-            inner = (distance <= tolerance_m) & (nearest >= 2) & (nearest <= len(seam.positions_m) - 3)
-            if seam.closed or not inner.any():
-                continue
-            cut = int(nearest[inner][0])
-            head = TracedSeam(seam.positions_m[: cut + 1], seam.torch_axes[: cut + 1], False, seam.joint, seam.confidence)
-            tail = TracedSeam(seam.positions_m[cut:], seam.torch_axes[cut:], False, seam.joint, seam.confidence)
-            result[index : index + 1] = [head, tail]
-            changed = True
-            break
-    return result
 
 def _junction(point: np.ndarray, others: list[TracedSeam], join_m: float) -> bool:
     """True when a third seam (at least a direction baseline long) also ends within
@@ -234,14 +155,15 @@ def _junction(point: np.ndarray, others: list[TracedSeam], join_m: float) -> boo
         if not other.closed and polyline_length(other.positions_m) >= END_BASELINE_M
     )
 
+
 def _closed_if_ends_meet(seam: TracedSeam, join_m: float, cos_turn: float) -> TracedSeam:
     points = seam.positions_m
     if seam.closed or len(points) < 8:
         return seam
     gap = points[0] - points[-1]
-    length = seam_length(seam)
+    length = seam.length_m
     out_end, out_start = end_direction(points, at_start=False), end_direction(points, at_start=True)
     meets = np.linalg.norm(gap) <= join_m and -out_end @ out_start >= cos_turn and length > 4 * join_m
     if not meets:
         return seam
-    return TracedSeam(points, seam.torch_axes, True, seam.joint, seam.confidence)
+    return TracedSeam(points, seam.torch_axes, True, seam.joint, seam.confidence, sources=seam.sources)

@@ -1,15 +1,13 @@
 import numpy as np
-from scipy.spatial import cKDTree
 
-from weldseam.config import SectionConfig
-from weldseam.pipeline.assemble import assemble_seams, join_pieces, split_at_junctions, trim_overlaps
-from weldseam.pipeline.section import section_params
+from weldseam.pipeline.join import join_pieces, trim_overlaps
+from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.trace import TracedSeam
 
 DOWN = np.array([0.0, 0.0, -1.0])
 
 
-def piece(points, joint="v_groove"):
+def piece(points, joint=JointKind.V_GROOVE):
     points = np.asarray(points, float)
     return TracedSeam(points, np.tile(DOWN, (len(points), 1)), False, joint, 1.0)
 
@@ -64,32 +62,11 @@ def test_an_overlapping_trace_keeps_only_what_it_adds():
     assert added[:, 0].min() > 0.1 and np.isclose(added[:, 0].max(), 0.13)
 
 
-def test_a_seam_is_split_where_another_ends_on_it():
-    through, stem = piece(line([0, 0, 0], [0.1, 0, 0])), piece(line([0.05, 0.003, 0], [0.05, 0.06, 0]))
-    seams = split_at_junctions([through, stem], tolerance_m=0.0125)
-    assert len(seams) == 3
-    ends = sorted(round(s.positions_m[:, 0].max(), 3) for s in seams if np.ptp(s.positions_m[:, 0]) > 0.01)
-    assert ends == [0.05, 0.1]
-
-
-def test_a_stub_too_short_to_be_a_seam_does_not_split_one():
-    through = piece(line([0, 0, 0], [0.1, 0, 0]))
-    stub = piece(line([0.05, 0.003, 0], [0.05, 0.0205, 0]))  # 17.5 mm: past a branch's 15, short of a seam's 20
-    nothing_near = np.full((20, 3), 1.0)  # no scan points to extend the seams into
-    seams = assemble_seams(
-        [through, stub], nothing_near, cKDTree(nothing_near), support=None, support_tolerance_m=0.002,
-        overlap_m=0.004, join_m=0.025, max_turn_deg=100.0, min_branch_m=0.015, min_seam_length_m=0.020,
-        step_m=0.002, max_gap_m=0.012, max_extension_m=0.3, max_hole_m=0.05,
-        section_params=section_params(SectionConfig(), voxel_m=0.001),
-    )
-    assert len(seams) == 1 and np.array_equal(seams[0].positions_m, through.positions_m)
-
-
 def test_a_bend_bridged_across_its_failed_sections_keeps_its_corner():
     # Over a block edge at the origin: the top run ends 5 mm before the edge, the side run
     # starts 5 mm below it. A straight bridge would cut the corner by 3.5 mm.
     top = piece(line([-0.06, 0, 0], [-0.005, 0, 0]))
-    side = TracedSeam(line([0, 0, -0.005], [0, 0, -0.06]), np.tile([-1.0, 0, 0], (28, 1)), False, "v_groove", 1.0)
+    side = TracedSeam(line([0, 0, -0.005], [0, 0, -0.06]), np.tile([-1.0, 0, 0], (28, 1)), False, JointKind.V_GROOVE, 1.0)
     (seam,) = join([top, side])
     distances = np.linalg.norm(seam.positions_m, axis=1)
     corner = np.argmin(distances)

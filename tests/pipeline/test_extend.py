@@ -1,0 +1,288 @@
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from tests.pipeline.test_section import surface_of
+from weldseam.config import ExtendConfig
+from weldseam.geometry import polyline_length
+from weldseam.pipeline.ends import end_curve
+from weldseam.pipeline.extend import extend_seam, extend_seams
+from weldseam.pipeline.holes import HOLE_EDGE_M, hole_aim
+from weldseam.pipeline.parallel import worker_process
+from weldseam.pipeline.joints import JointKind
+from weldseam.pipeline.trace import TracedSeam
+
+RING_RADIUS_M = 0.05
+STEP_M = 0.002
+
+
+def ring_groove_plate(rng, pitch=0.0008, half_open=0.006, depth=0.006):
+    """A plate (z = 0 top) with a V-groove around a circle of RING_RADIUS_M, sampled on a grid, 0.1 mm noise."""
+    axis = np.arange(-0.085, 0.085, pitch)
+    x, y = np.meshgrid(axis, axis)
+    across = np.abs(np.hypot(x, y) - RING_RADIUS_M)
+    z = -np.clip((half_open - across) * depth / half_open, 0, None) + rng.normal(0, 0.0001, x.shape)
+    return np.column_stack([x.ravel(), y.ravel(), z.ravel()])
+
+
+def ring_arc(start_rad, end_rad):
+    angles = np.arange(start_rad, end_rad, STEP_M / RING_RADIUS_M)
+    positions = RING_RADIUS_M * np.column_stack([np.cos(angles), np.sin(angles), np.zeros(len(angles))])
+    return TracedSeam(positions, np.tile([0.0, 0.0, -1.0], (len(angles), 1)), False, JointKind.V_GROOVE, 1.0)
+
+
+def test_an_extension_round_a_loop_stops_where_it_meets_the_seam(rng):
+    points = ring_groove_plate(rng)
+    seam = ring_arc(0.0, 1.5 * np.pi)  # three quarters of the ring traced; the rest is for extension
+    positions = extended(seam, points)
+    radii = np.hypot(positions[:, 0], positions[:, 1])
+    assert np.abs(radii - RING_RADIUS_M).max() < 0.0005, "the extension follows the groove"
+    circumference = 2 * np.pi * RING_RADIUS_M
+    assert polyline_length(positions) > 0.9 * circumference, "the missing quarter is filled in"
+    assert polyline_length(positions) < circumference, "and it does not go round a second time"
+    assert np.linalg.norm(positions[0] - positions[-1]) <= 3 * STEP_M, "the ends meet, so the seam can close"
+
+
+def v_depth(across, half_open=0.006, depth=0.005):
+    return np.clip((half_open - np.abs(across)) * depth / half_open, 0, None)
+
+
+def grid(first, second, pitch=0.0008):
+    a, b = np.meshgrid(np.arange(*first, pitch), np.arange(*second, pitch))
+    return a.ravel(), b.ravel()
+
+
+def straight_trace(start_x, end_x, axis):
+    x = np.arange(start_x, end_x, STEP_M)
+    positions = np.column_stack([x, np.zeros(len(x)), np.zeros(len(x))])
+    return TracedSeam(positions, np.tile(axis, (len(x), 1)), False, JointKind.V_GROOVE, 1.0)
+
+
+def extended(seam, points, max_hole_m=0.05):
+    params = replace(ExtendConfig(), step_m=STEP_M, max_hole_m=max_hole_m)
+    return extend_seam(seam, surface_of(points), params).positions_m
+
+
+def test_an_extension_follows_a_groove_over_a_block_edge_and_keeps_the_corner(rng):
+    """A groove along x on a block's top (z = 0, x <= 0) that runs on down its side face (x = 0)."""
+    x, y = grid((-0.08, 0.0), (-0.03, 0.03))
+    top = np.column_stack([x, y, -v_depth(y)])
+    z, y = grid((-0.07, 0.0), (-0.03, 0.03))
+    side = np.column_stack([-v_depth(y), y, z])
+    points = np.vstack([top, side]) + rng.normal(0, 0.0001, (len(top) + len(side), 3))
+    positions = extended(straight_trace(-0.06, -0.03, [0.0, 0.0, -1.0]), points)
+    down_the_side = positions[positions[:, 2] < -0.01]
+    assert len(down_the_side) > 10 and np.abs(down_the_side[:, :2]).max() < 0.0005
+    assert down_the_side[:, 2].min() < -0.05, "followed to near the side's bottom"
+    assert np.linalg.norm(positions, axis=1).min() < 0.001, "the corner itself is on the path"
+
+
+def plate_ending_on_a_table(rng):
+    """A 10 mm plate (top z = 0, end face x = 0) on a table (z = -0.01): its groove along x ends at the plate end."""
+    x, y = grid((-0.08, 0.0), (-0.03, 0.03))
+    top = np.column_stack([x, y, -v_depth(y, depth=0.01)])
+    z, y = grid((-0.01, 0.0), (-0.03, 0.03))
+    end_face = np.column_stack([-v_depth(y, depth=0.01) * (z > -0.01), y, z])
+    x, y = grid((0.0, 0.06), (-0.03, 0.03))
+    table = np.column_stack([x, y, np.full(len(x), -0.01)])
+    return np.vstack([top, end_face, table]) + rng.normal(0, 0.0001, (len(top) + len(end_face) + len(table), 3))
+
+
+def test_an_extension_does_not_turn_down_a_plate_end(rng):
+    positions = extended(straight_trace(-0.06, -0.03, [0.0, 0.0, -1.0]), plate_ending_on_a_table(rng))
+    assert positions[:, 2].min() > -0.002 and positions[:, 0].max() < 0.002, "the seam ends at the plate end"
+
+
+def test_an_extension_bridges_a_dropout_over_one_edge_and_stops_at_the_plate_end(rng):
+    points = plate_ending_on_a_table(rng)
+    x, y, z = points.T
+    dropout = (x > -0.045) & (x < -0.012) & (y > -0.004) & (y < 0.016) & (z > -0.009)  # 33 mm: the right edge lost
+    positions = extended(straight_trace(-0.075, -0.055, [0.0, 0.0, -1.0]), points[~dropout])
+    across = positions[(positions[:, 0] > -0.043) & (positions[:, 0] < -0.014)]
+    assert np.diff(np.sort(across[:, 0])).max() < 2.5 * STEP_M, "no stretch of the dropout left without poses"
+    assert np.abs(across[:, 1:]).max() < 0.0005, "bridged on the groove"
+    # Sections that straddle the dropout's far boundary fit less well; they stay within 1.5 mm.
+    assert np.abs(positions[:, 1:]).max() < 0.0015
+    assert -0.007 < positions[:, 0].max() < 0.002, "goes on past the dropout to the plate end, not beyond it"
+
+
+def test_an_extension_crosses_a_hole_in_the_scan_and_goes_on_to_the_plate_end(rng):
+    points = plate_ending_on_a_table(rng)
+    hole = (points[:, 0] > -0.045) & (points[:, 0] < -0.015)  # 30 mm with no data across the whole window
+    seam = straight_trace(-0.075, -0.055, [0.0, 0.0, -1.0])
+    positions = extended(seam, points[~hole])
+    across = positions[(positions[:, 0] > -0.046) & (positions[:, 0] < -0.014)]
+    assert np.diff(np.sort(across[:, 0])).max() < 1.5 * STEP_M, "the hole is filled with poses"
+    assert np.abs(across[:, 1:]).max() < 0.0005, "on the seam line"
+    assert np.abs(positions[:, 1:]).max() < 0.0015  # as in the dropout test: the plate end's sections straddle it
+    assert -0.008 < positions[:, 0].max() < 0.002, "on to the plate end, not beyond it"
+    assert extended(seam, points[~hole], max_hole_m=0.0)[:, 0].max() < -0.04, "max_hole_m = 0: stops at the hole"
+
+
+def plate_with_a_hole_up_to_its_end(rng):
+    """A 12 mm plate (top z = 0, end x = 0) with a 6 mm deep groove along x on a table (z = -0.012),
+    seen from above; a dropout covers the groove's last 45 mm but for a strip at 2.6-4 mm from the
+    end, where one section fits. Returns the points and whether each is on the table."""
+    x, y = grid((-0.08, 0.04), (-0.03, 0.03))
+    points = np.column_stack([x, y, np.where(x < 0, -v_depth(y, depth=0.006), -0.012)])
+    points += rng.normal(0, 0.0001, points.shape)
+    x = points[:, 0]
+    kept = ~(((x > -0.045) & (x < -0.004)) | ((x > -0.0026) & (x < 0)))
+    return points[kept], x[kept] >= 0
+
+
+def test_an_extension_crosses_a_hole_to_one_section_before_the_plate_end(rng):
+    """One fit beyond the hole, and the table seen right after it: the part ends there."""
+    points, _ = plate_with_a_hole_up_to_its_end(rng)
+    positions = extended(straight_trace(-0.075, -0.055, [0.0, 0.0, -1.0]), points)
+    across = positions[(positions[:, 0] > -0.046) & (positions[:, 0] < -0.004)]
+    assert np.diff(np.sort(across[:, 0])).max() < 1.5 * STEP_M, "the hole is filled with poses"
+    assert np.abs(positions[:, 1:]).max() < 0.0015
+    assert -0.0035 < positions[:, 0].max() < 0.002, "on to the plate end, not beyond it"
+
+
+def test_one_section_beyond_a_hole_with_nothing_seen_past_it_does_not_carry_the_seam_across(rng):
+    """Without the table behind the plate's end, the one fit could be a stray inside a longer hole."""
+    points, on_table = plate_with_a_hole_up_to_its_end(rng)
+    positions = extended(straight_trace(-0.075, -0.055, [0.0, 0.0, -1.0]), points[~on_table])
+    assert positions[:, 0].max() < -0.04
+
+
+def plate_with_an_oblique_end(rng):
+    """A 12 mm plate (top z = 0) with a 6 mm deep groove along x, on a table (z = -0.012), seen
+    from above; its end x = y crosses the groove at 45 degrees (the seam ends at x = 0). Returns
+    the points and whether each is on the plate."""
+    x, y = grid((-0.08, 0.04), (-0.03, 0.03))
+    on_plate = x < y
+    points = np.column_stack([x, y, np.where(on_plate, -v_depth(y, depth=0.006), -0.012)])
+    return points + rng.normal(0, 0.0001, points.shape), on_plate
+
+
+def test_an_extension_follows_a_groove_to_where_an_oblique_plate_end_crosses_it(rng):
+    """Over the last 6 mm the plate on one side has ended and the table shows there."""
+    points, _ = plate_with_an_oblique_end(rng)
+    positions = extended(straight_trace(-0.075, -0.055, [0.0, 0.0, -1.0]), points)
+    assert -0.002 < positions[:, 0].max() < 0.001, "to the seam's end, not beyond it"
+    assert np.abs(positions[:, 1:]).max() < 0.001
+
+
+def test_an_extension_does_not_pass_an_oblique_plate_end_with_nothing_seen_past_it(rng):
+    """Without the table, one side's plate ending is no sign that the seam ends just ahead."""
+    points, on_plate = plate_with_an_oblique_end(rng)
+    positions = extended(straight_trace(-0.075, -0.055, [0.0, 0.0, -1.0]), points[on_plate])
+    assert positions[:, 0].max() < 0.0
+
+
+def plates_in_line_with_a_gap(rng, gap_m):
+    """Two 12 mm plates (top z = 0) in line, each with a 6 mm deep groove along x, on a table
+    (z = -0.012) that shows through a gap of `gap_m` between them starting at x = -0.03."""
+    x, y = grid((-0.08, 0.06), (-0.03, 0.03))
+    in_gap = (x >= -0.03) & (x < -0.03 + gap_m)
+    points = np.column_stack([x, y, np.where(in_gap, -0.012, -v_depth(y, depth=0.006))])
+    return points + rng.normal(0, 0.0001, points.shape)
+
+
+@pytest.mark.parametrize("gap_m", [0.012, 0.02, 0.03])
+def test_an_extension_stops_at_a_plate_end_where_the_table_shows_before_the_next_plate(rng, gap_m):
+    """The camera sees the table through the gap: the seam ends there, and the groove in line on
+    the next plate is another seam, not the same one across a hole."""
+    positions = extended(straight_trace(-0.075, -0.055, [0.0, 0.0, -1.0]), plates_in_line_with_a_gap(rng, gap_m))
+    assert -0.033 < positions[:, 0].max() < -0.028, "to the plate end, not across the gap"
+    assert np.abs(positions[:, 1:]).max() < 0.0015
+
+
+def test_an_extension_never_crosses_where_the_groove_stops_and_flat_plate_goes_on(rng):
+    """A groove along x interrupted for 20 mm (-0.04 < x < -0.02) by flat plate, then going on:
+    two seams in line, and the weld must not be carried across the flat stretch."""
+    x, y = grid((-0.08, 0.02), (-0.03, 0.03))
+    groove = (x < -0.04) | (x > -0.02)
+    points = np.column_stack([x, y, -v_depth(y) * groove]) + rng.normal(0, 0.0001, (len(x), 3))
+    positions = extended(straight_trace(-0.075, -0.055, [0.0, 0.0, -1.0]), points)
+    assert positions[:, 0].max() < -0.036
+
+
+def test_an_extension_crosses_a_hole_on_a_curved_seam_along_the_curve(rng):
+    points = ring_groove_plate(rng)
+    angle = np.arctan2(points[:, 1], points[:, 0]) % (2 * np.pi)
+    hole = (angle > 1.65 * np.pi) & (angle < 1.65 * np.pi + 0.035 / RING_RADIUS_M)  # 35 mm of the ring
+    positions = extended(ring_arc(0.0, 1.5 * np.pi), points[~hole])
+    radii = np.hypot(positions[:, 0], positions[:, 1])
+    assert np.abs(radii - RING_RADIUS_M).max() < 0.0005, "the hole is bridged along the ring, not across it"
+    assert polyline_length(positions) > 0.95 * 2 * np.pi * RING_RADIUS_M
+    assert np.linalg.norm(positions[0] - positions[-1]) <= 3 * STEP_M
+
+
+def test_an_extension_whose_end_leans_into_the_work_still_finds_the_seam_past_a_gap(rng):
+    """The last traced points sink 1 mm into the work over 10 mm (poorly fitted end sections),
+    so the end tangent leans 6 degrees into the plate, and the next 8 mm hold no data: the fits
+    beyond lie 1-2 mm above the predictions, which is still the seam."""
+    points = plate_ending_on_a_table(rng)
+    gap = (points[:, 0] > -0.045) & (points[:, 0] < -0.037)
+    seam = straight_trace(-0.075, -0.047, [0.0, 0.0, -1.0])
+    leaning = seam.positions_m.copy()
+    leaning[:, 2] = -np.clip(leaning[:, 0] + 0.057, 0.0, None) * np.tan(np.radians(6))
+    positions = extended(TracedSeam(leaning, seam.torch_axes, False, JointKind.V_GROOVE, 1.0), points[~gap])
+    beyond = positions[positions[:, 0] > -0.035]
+    assert len(beyond) > 10 and np.abs(beyond[:, 1:]).max() < 0.0015
+    assert positions[:, 0].max() > -0.008, "on to the plate end"
+
+
+def leaning_end_trace():
+    """A straight trace along x to x = -0.049 whose last three points lean 0.5, 1.5 and 3 mm
+    sideways, as fits do where a hole's edge cuts their sections short (one groove wall seen)."""
+    seam = straight_trace(-0.075, -0.047, [0.0, 0.0, -1.0])
+    leaning = seam.positions_m.copy()
+    leaning[-3:, 1] = [0.0005, 0.0015, 0.003]
+    return TracedSeam(leaning, seam.torch_axes, False, JointKind.V_GROOVE, 1.0)
+
+
+def test_a_hole_is_aimed_across_from_the_seam_before_the_fits_that_lean_at_its_edge():
+    seam = leaning_end_trace().positions_m
+    end_tangent = end_curve(seam)[0]
+    assert np.degrees(np.arccos(end_tangent[0])) > 5, "the end's own tangent leans with the last fits"
+    origin, direction, bend = hole_aim(seam)
+    assert origin[0] < seam[-1][0] - HOLE_EDGE_M + 1e-9 and abs(origin[1]) < 1e-4, "a fit before the edge"
+    assert np.degrees(np.arccos(direction[0])) < 0.5 and np.linalg.norm(bend) < 1.0, "along the seam there"
+    assert hole_aim(seam[-5:]) is None, "fewer than three fits before the edge: no second aim"
+
+
+def test_an_extension_crosses_a_short_hole_after_fits_that_lean_at_its_edge(rng):
+    """14 mm without data after the leaning end. Sought along the end's own tangent, the groove
+    beyond lies 9-11 mm sideways of the predictions, too far to be taken for it; sought from
+    before the hole's edge it is on the line, and carried on to the plate end."""
+    points = plate_ending_on_a_table(rng)
+    hole = (points[:, 0] > -0.0465) & (points[:, 0] < -0.0325)
+    positions = extended(leaning_end_trace(), points[~hole])
+    beyond = positions[(positions[:, 0] > -0.03) & (positions[:, 0] < -0.01)]
+    assert len(beyond) >= 8 and np.abs(beyond[:, 1:]).max() < 0.001, "found on the groove beyond the hole"
+    assert positions[:, 0].max() > -0.008, "on to the plate end"
+
+
+@pytest.mark.parametrize("with_worker", [False, True])
+def test_extending_the_ends_apart_gives_the_seams_extended_one_end_after_the_other(rng, with_worker):
+    """The ends of a loop's arc meet (one stops where the other's extension is, across a hole in
+    the gap), a second seam is shorter than the ends' look-back (extended one end after the
+    other) and a third is closed (left alone)."""
+    points = ring_groove_plate(rng)
+    gap = np.abs(np.arctan2(points[:, 1], points[:, 0]) + 0.4) < 0.15
+    points = points[~(gap & (np.abs(np.hypot(points[:, 0], points[:, 1]) - RING_RADIUS_M) < 0.03))]
+    surface = surface_of(points)
+    closed = ring_arc(0.0, 2 * np.pi)
+    seams = [ring_arc(0.0, 1.5 * np.pi), ring_arc(0.5 * np.pi, 0.5 * np.pi + 0.5), TracedSeam(
+        closed.positions_m, closed.torch_axes, True, JointKind.V_GROOVE, 1.0)]
+    params = replace(ExtendConfig(), step_m=STEP_M)
+    one_after_the_other = [extend_seam(seam, surface, params) for seam in seams]
+    if with_worker:
+        with worker_process(surface):
+            apart = extend_seams(seams, surface, params)
+    else:
+        apart = extend_seams(seams, surface, params)
+    assert one_after_the_other[0].holes, "the loop's ends meet across the hole"
+    assert len(one_after_the_other[1].positions_m) > len(seams[1].positions_m)
+    for serial, parallel in zip(one_after_the_other, apart):
+        assert serial.positions_m.tobytes() == parallel.positions_m.tobytes()
+        assert serial.torch_axes.tobytes() == parallel.torch_axes.tobytes()
+        assert serial.holes == parallel.holes and serial.closed == parallel.closed
+
+

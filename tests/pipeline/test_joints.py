@@ -1,0 +1,124 @@
+import numpy as np
+import pytest
+
+from weldseam.config import JointsConfig
+from weldseam.pipeline.joints import JointKind, NoFit, fit_profile
+
+FILLET, V_GROOVE = JointKind.FILLET, JointKind.V_GROOVE
+PARAMS = JointsConfig()
+
+
+def profile(w_of_u, rng, noise=0.0003, half_width=0.025, pitch=0.0004, tilt_rad=0.0):
+    u = np.arange(-half_width, half_width, pitch)
+    w = w_of_u(u) + rng.normal(0, noise, len(u))
+    c, s = np.cos(tilt_rad), np.sin(tilt_rad)
+    return c * u - s * w, s * u + c * w
+
+
+def v_groove(centre, half_open=0.008, depth=0.010):
+    return lambda u: -np.clip((half_open - np.abs(u - centre)) * depth / half_open, 0, None)
+
+
+def test_groove_centre_is_the_middle_of_the_opening(rng):
+    u, w = profile(v_groove(0.004), rng)
+    fit = fit_profile(u, w, PARAMS)
+    assert fit.kind == V_GROOVE
+    assert abs(fit.u - 0.004) < 0.0003 and abs(fit.w) < 0.0003
+    assert abs(fit.axis_u) < 0.05 and fit.axis_w < -0.99  # perpendicular to the plate, into it
+
+
+def test_groove_torch_axis_follows_a_tilted_plate(rng):
+    u, w = profile(v_groove(0.0), rng, tilt_rad=np.radians(10))
+    fit = fit_profile(u, w, PARAMS)
+    angle = np.degrees(np.arctan2(fit.axis_u, -fit.axis_w))
+    assert fit.kind == V_GROOVE and abs(angle - 10) < 1.5
+
+
+def test_groove_with_one_hidden_wall_is_still_centred(rng):
+    u, w = profile(v_groove(0.0), rng)
+    hidden = (u > 0) & (u < 0.008)  # the right wall is not seen
+    fit = fit_profile(u[~hidden], w[~hidden], PARAMS)
+    assert fit.kind == V_GROOVE and abs(fit.u) < 0.0006
+
+
+@pytest.mark.parametrize("tilt_deg", [0.0, 25.0])
+def test_a_dropout_going_on_past_a_hidden_walls_edge_gives_no_fit_rather_than_a_wider_groove(rng, tilt_deg):
+    plate_u, plate_w = profile(v_groove(0.0), rng)
+    c, s = np.cos(np.radians(tilt_deg)), np.sin(np.radians(tilt_deg))  # the frame turned against the plate
+    u, w = c * plate_u - s * plate_w, s * plate_u + c * plate_w
+    for shadow_m in (0.0, 0.001):  # the hidden wall's edge is seen, or 1 mm more is lost: still a fit
+        unseen = (plate_u > 0) & (plate_u < 0.008 + shadow_m)
+        fit = fit_profile(u[~unseen], w[~unseen], PARAMS)
+        assert fit.kind == V_GROOVE and abs(c * fit.u + s * fit.w) < 0.0003 + shadow_m / 2, shadow_m
+    unseen = (plate_u > 0) & (plate_u < 0.016)  # the dropout runs 8 mm onto the plate: that edge is not seen
+    assert isinstance(fit_profile(u[~unseen], w[~unseen], PARAMS), NoFit)
+
+
+def test_a_groove_in_depth_quantised_in_1_mm_steps_is_found(rng):
+    """Seen square on, a D415's 1 mm depth steps put ~90 % of the flat surface on one level: the
+    median deviation is 0, and the next level down must not pass for a depression."""
+    errors = []
+    for _ in range(40):
+        u, w = profile(v_groove(0.002, depth=0.006), rng)
+        fit = fit_profile(u, np.round((w - 0.0001) / 0.001) * 0.001 + 0.0001, PARAMS)
+        assert fit.kind == V_GROOVE
+        errors.append(fit.u - 0.002)
+    # A single line of points across 1 mm steps places the edges coarsely (one section in ten is
+    # off by 1.5-3 mm); along a seam the sections average out.
+    assert abs(np.mean(errors)) < 0.0003 and np.median(np.abs(errors)) < 0.0005
+
+
+def test_fillet_corner_and_bisector(rng):
+    u, w = profile(lambda u: np.abs(u - 0.002), rng)  # 90-degree corner at u = 2 mm
+    fit = fit_profile(u, w, PARAMS)
+    assert fit.kind == FILLET
+    assert abs(fit.u - 0.002) < 0.0005 and abs(fit.w) < 0.0005
+    assert abs(fit.axis_u) < 0.05 and fit.axis_w < -0.99
+
+
+def test_a_fit_seeking_one_joint_finds_that_joint_only(rng):
+    corner_u, corner_w = profile(lambda u: np.abs(u - 0.002), rng)
+    groove_u, groove_w = profile(v_groove(0.004), rng)
+    assert fit_profile(corner_u, corner_w, PARAMS, {FILLET}) == fit_profile(corner_u, corner_w, PARAMS)
+    assert isinstance(fit_profile(corner_u, corner_w, PARAMS, {V_GROOVE}), NoFit)
+    assert fit_profile(groove_u, groove_w, PARAMS, {V_GROOVE}) == fit_profile(groove_u, groove_w, PARAMS)
+    found = fit_profile(groove_u, groove_w, PARAMS, {FILLET})
+    assert isinstance(found, NoFit) or found.kind == FILLET
+
+
+def test_a_step_a_convex_edge_and_a_plane_are_not_seams(rng):
+    for shape in (lambda u: np.where(u > 0, 0.008, 0.0), lambda u: -np.abs(u), lambda u: 0 * u):
+        u, w = profile(shape, rng)
+        assert isinstance(fit_profile(u, w, PARAMS), NoFit)
+
+
+def test_groove_centre_is_unbiased_on_noisy_symmetric_profiles():
+    rng = np.random.default_rng(0)
+    centres = []
+    for _ in range(200):
+        u = rng.uniform(-0.025, 0.025, 125)
+        w = v_groove(0.0)(u) + rng.normal(0, 0.0005, len(u))
+        fit = fit_profile(u, w, PARAMS)
+        centres.append(fit.u)
+    assert abs(np.mean(centres)) < 0.15e-3  # scatter ~0.6 mm, so the mean's own noise is ~0.05 mm
+
+
+def test_one_face_beside_a_hole_is_not_a_fillet(rng):
+    # A flange seen obliquely up to the shadow a web casts: one tilted face, then no data
+    # but one stray point 18 mm away. The stray point and the face's last few points must
+    # not pass for a second face (the old leg measure saw a 20 mm leg there).
+    for _ in range(20):
+        u = np.arange(-0.022, 0.0005, 0.0007)
+        w = -0.45 * u + rng.normal(0, 0.0005, len(u))
+        assert isinstance(fit_profile(np.append(u, 0.0185), np.append(w, 0.0084), PARAMS), NoFit)
+
+
+def test_a_hole_with_vertical_walls_is_not_a_groove(rng):
+    # Looking down into a through-hole: surface, nothing (vertical walls), the table far
+    # below, nothing, surface.
+    u = np.arange(-0.025, 0.025, 0.0005)
+    w = np.where(np.abs(u) < 0.006, -0.012, 0.0) + rng.normal(0, 0.0003, len(u))
+    seen = (np.abs(u) < 0.004) | (np.abs(u) > 0.008)
+    assert isinstance(fit_profile(u[seen], w[seen], PARAMS), NoFit)
+
+

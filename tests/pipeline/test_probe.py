@@ -1,0 +1,34 @@
+import numpy as np
+
+from tests.pipeline.test_extend import grid, v_depth
+from tests.pipeline.test_section import surface_of
+from weldseam.config import TraceConfig
+from weldseam.pipeline import section
+from weldseam.pipeline.joints import JointKind
+from weldseam.pipeline.order import Chain
+from weldseam.pipeline.probe import probe_chains
+from weldseam.pipeline.trace import trace_chain
+
+
+def test_a_chains_probe_fits_are_reused_by_its_trace_and_give_the_same_seam(rng, monkeypatch):
+    """The probes are sections at chain points in the trace's own frames: reusing them saves
+    their fits and changes nothing (a wide groove, whose chain along one edge is refitted)."""
+    x, y = grid((-0.07, 0.07), (-0.035, 0.035))
+    points = np.column_stack([x, y, -v_depth(y, half_open=0.008, depth=0.006)]) + rng.normal(0, 0.0001, (len(x), 3))
+    along = np.arange(-0.05, 0.05, 0.0025)
+    chain = Chain(np.column_stack([along, np.full(len(along), -0.008), np.zeros(len(along))]), False)
+    approx_axes = np.tile([0.0, np.sin(np.radians(15)), -np.cos(np.radians(15))], (len(along), 1))
+    surface = surface_of(points)
+    probe_fits = probe_chains([chain], [approx_axes], surface)[0]
+    assert sorted(probe_fits) == [0, 20, 39] and all(fit.kind == JointKind.V_GROOVE for fit in probe_fits.values())
+    fitted = []
+    fit_framed = section._fit_framed
+    monkeypatch.setattr(section, "_fit_framed", lambda *args: fitted.append(1) or fit_framed(*args))
+    reused = trace_chain(chain, approx_axes, probe_fits, surface, TraceConfig())
+    fits_with_probes = len(fitted)
+    alone = trace_chain(chain, approx_axes, {}, surface, TraceConfig())
+    assert fits_with_probes == len(fitted) - fits_with_probes - 2 * len(probe_fits), "each probe fitted twice, once"
+    assert len(reused) == len(alone) == 1
+    assert np.array_equal(reused[0].positions_m, alone[0].positions_m)
+    assert np.array_equal(reused[0].torch_axes, alone[0].torch_axes)
+    assert np.abs(reused[0].positions_m[:, 1:]).max() < 0.0005, "on the seam line, at the surface"

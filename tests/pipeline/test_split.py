@@ -1,0 +1,20 @@
+import numpy as np
+
+from tests.pipeline.test_join import line, piece
+from weldseam.config import SplitConfig
+from weldseam.pipeline.split import split_at_junctions, split_seams
+
+
+def test_a_seam_is_split_where_another_ends_on_it():
+    through, stem = piece(line([0, 0, 0], [0.1, 0, 0])), piece(line([0.05, 0.003, 0], [0.05, 0.06, 0]))
+    seams = split_at_junctions([through, stem], tolerance_m=0.0125)
+    assert len(seams) == 3
+    ends = sorted(round(s.positions_m[:, 0].max(), 3) for s in seams if np.ptp(s.positions_m[:, 0]) > 0.01)
+    assert ends == [0.05, 0.1]
+
+
+def test_a_stub_too_short_to_be_a_seam_does_not_split_one():
+    through = piece(line([0, 0, 0], [0.1, 0, 0]))
+    stub = piece(line([0.05, 0.003, 0], [0.05, 0.0205, 0]))  # 17.5 mm: past a branch's 15, short of a seam's 20
+    seams = split_seams([through, stub], [], SplitConfig(), step_m=0.002)
+    assert len(seams) == 1 and np.array_equal(seams[0].positions_m, through.positions_m)

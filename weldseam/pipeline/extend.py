@@ -1,0 +1,284 @@
+"""Extend: carry each open seam end section by section to the seam's real end.
+
+From an end, the seam is predicted along its curve (ends.end_curve) and each step tries, in
+turn, a short list of strategies; the first that finds the seam adds its fits, and the end is
+re-aimed by them:
+
+1. the next fit ahead (stepping over failed sections up to `max_skip_m`; a groove section in a
+   dropout is bridged from the sections before: weldseam.pipeline.bridge);
+2. a turn over a 90-degree edge (a groove over a block's edge, a seam up a wall: turn.py);
+3. the part's end: where the scan sees past the part just ahead, the seam stops there;
+4. a hole in the scan over the whole seam, crossed and interpolated (holes.py).
+
+When none finds the seam, the end stops. An extension stops where it comes within two steps of
+the seam itself (it has gone round a loop; the ends then meet and the seam closes). Run on joined
+seams only: extending every partial trace would walk the same seam once per piece.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from weldseam.config import ExtendConfig
+from weldseam.geometry import arc_lengths, bend_corner, polyline_length, unit
+from weldseam.pipeline.bridge import GrooveTemplate, groove_template, part_ends_ahead
+from weldseam.pipeline.ends import END_BASELINE_M, TANGENT_BASELINE_M, end_curve
+from weldseam.pipeline.joints import JointKind
+from weldseam.pipeline.parallel import map_shared
+from weldseam.pipeline.section import FineSurface, SectionFit, section_frames
+from weldseam.pipeline.holes import across_hole, hole_aim, hole_of
+from weldseam.pipeline.seek import Extension, next_fit
+from weldseam.pipeline.turn import turned_run
+from weldseam.pipeline.trace import Hole, TracedSeam
+
+# The groove template a bridged section assumes: the median of this many latest fits.
+TEMPLATE_MEMORY = 6
+
+
+@dataclass(frozen=True)
+class Step:
+    """One step of an extension: the fits it adds (bridged ones first across a hole), the hole it
+    crossed, and after a turn over an edge, the travel on the new face and the first of the fits
+    on it."""
+
+    fits: list[SectionFit]
+    hole: Hole | None = None
+    turned_to: np.ndarray | None = None
+    new_face_from: int = 0
+
+
+STOP = Step([])  # a strategy's answer where the seam certainly ends here
+
+
+def extend_seams(seams: list[TracedSeam], surface: FineSurface, params: ExtendConfig) -> list[TracedSeam]:
+    """Every open seam extended at both ends (extend_seam), the ends of all seams shared with the
+    worker process (parallel.map_shared). Each end of a seam longer than TANGENT_BASELINE_M (with
+    at least TEMPLATE_MEMORY points) is extended on its own: its prediction and templates look no
+    further back than that, so the other end's extension changes only where this one stops
+    (where it comes back to the seam), and that is applied afterwards (_meeting_stop). The result
+    is the same as extending one end after the other; a shorter seam is extended so."""
+    jobs = []
+    for k, seam in enumerate(seams):
+        if seam.closed or len(seam.positions_m) < 2:
+            continue
+        if len(seam.positions_m) >= TEMPLATE_MEMORY and polyline_length(seam.positions_m) > TANGENT_BASELINE_M:
+            jobs += [(k, seam, True, params), (k, seam, False, params)]
+        else:
+            jobs.append((k, seam, None, params))
+    done: dict[int, list] = {}
+    for (k, *_), extension in zip(jobs, map_shared(_extension_job, (surface,), jobs)):
+        done.setdefault(k, []).append(extension)
+    result = list(seams)
+    for k, ends in done.items():
+        if len(ends) == 2:
+            (start, start_stop), (end, end_stop) = ends
+            end, end_stop = _meeting_stop(end, end_stop, start, params.step_m)
+            result[k] = _extended(seams[k], start, start_stop, end, end_stop)
+        else:
+            result[k] = ends[0]
+    return result
+
+
+def extend_seam(seam: TracedSeam, surface: FineSurface, params: ExtendConfig) -> TracedSeam:
+    """The seam with sections added beyond both open ends while they fit its joint near the
+    predicted place (see the module), so the path reaches the seam's real ends."""
+    if seam.closed or len(seam.positions_m) < 2:
+        return seam
+    extension = Extension(surface, seam.joint, params)
+    start, start_stop = extend_end(extension, seam.positions_m[::-1], seam.torch_axes[::-1])
+    before = _fits(start)[::-1]
+    end, end_stop = extend_end(
+        extension,
+        np.array([f.point_m for f in before] + list(seam.positions_m)),
+        np.array([f.torch_axis for f in before] + list(seam.torch_axes)),
+    )
+    return _extended(seam, start, start_stop, end, end_stop)
+
+
+def _extension_job(surface: FineSurface, job) -> tuple[list[Step], Step | None] | TracedSeam:
+    """(steps, stop) of one end of a seam (at_start True or False), or the whole seam extended
+    (at_start None)."""
+    _, seam, at_start, params = job
+    if at_start is None:
+        return extend_seam(seam, surface, params)
+    order = slice(None, None, -1) if at_start else slice(None)
+    return extend_end(Extension(surface, seam.joint, params), seam.positions_m[order], seam.torch_axes[order])
+
+
+def _fits(steps: list[Step]) -> list[SectionFit]:
+    """The fits of all `steps`, in order."""
+    return [fit for step in steps for fit in step.fits]
+
+
+def _meeting_stop(end: list[Step], end_stop: Step | None, start: list[Step], step_m: float):
+    """(steps, stop) of an end extended on its own, cut where extending one end after the other
+    stops it: at its first step within two steps of the start's extension (a loop closing)."""
+    if not start:
+        return end, end_stop
+    start_tree = cKDTree([f.point_m for f in _fits(start)])
+    for k, step in enumerate(end):
+        if start_tree.query([f.point_m for f in step.fits])[0].min() <= 2 * step_m:
+            return end[:k], step
+    return end, end_stop
+
+
+def _extended(seam: TracedSeam, start: list[Step], start_stop, end: list[Step], end_stop) -> TracedSeam:
+    """The seam with the fits of its start's steps (reversed) before it and its end's after it;
+    its holes: its own, then those crossed by each end's steps and by the step that stopped it
+    (it came back to the seam: the path closes across that hole)."""
+    before, after = _fits(start)[::-1], _fits(end)
+    holes = [step.hole for steps, stop in ((start, start_stop), (end, end_stop)) for step in [*steps, stop]
+             if step is not None and step.hole is not None]  # fmt: skip
+    return TracedSeam(
+        np.array([f.point_m for f in before] + list(seam.positions_m) + [f.point_m for f in after]),
+        np.array([f.torch_axis for f in before] + list(seam.torch_axes) + [f.torch_axis for f in after]),
+        False, seam.joint, seam.confidence, (*seam.holes, *holes), sources=seam.sources,
+    )
+
+
+@dataclass
+class SeamEnd:
+    """An end being extended: its points, torch axes and which were bridged (travel order, the
+    end last), where its current face begins (after a turn over an edge), the curve it is
+    predicted along, and the groove templates of its fits (a groove only)."""
+
+    positions: list
+    axes: list
+    bridged: list
+    direction: np.ndarray
+    bend: np.ndarray
+    templates: list = field(default_factory=list)
+    face_start: int = 0
+
+    @property
+    def fitted(self) -> np.ndarray:
+        """The fitted (not bridged) points on the current face."""
+        return np.array(self.positions[self.face_start:])[~np.array(self.bridged[self.face_start:])]
+
+    def heading(self) -> tuple[np.ndarray, np.ndarray]:
+        """(direction, bend) to predict the next step along: past bridged points along the curve
+        from the last fitted one; right after a fit, straight (a fit per step re-aims it; the
+        curvature of a noisy end is not worth following)."""
+        since = _arc_since_fit(self.positions, self.bridged)
+        return unit(self.direction + since * self.bend), (self.bend if since > 0 else np.zeros(3))
+
+    def template(self) -> GrooveTemplate | None:
+        """Per side, and for the half-opening and the bottom, the median of the latest
+        TEMPLATE_MEMORY templates that measured it (None for one measured in fewer than half of
+        them); None when nothing qualifies."""
+        recent = self.templates[-TEMPLATE_MEMORY:]
+        values = []
+        for name in ("left_m", "right_m", "half_opening_m", "bottom_m"):
+            measured = [getattr(t, name) for t in recent if t is not None and getattr(t, name) is not None]
+            values.append(float(np.median(measured)) if len(measured) >= max(2, len(recent) / 2) else None)
+        return GrooveTemplate(*values) if any(v is not None for v in values) else None
+
+    def add(self, step: Step, extension: Extension) -> None:
+        """Take a step's fits, and re-aim along this face by its fitted sections (one step alone
+        is ~10 degrees noisy; a bridged point leans on one edge, and aiming by it would turn a
+        small offset into a drift)."""
+        if step.turned_to is not None:
+            self.direction, self.bend = step.turned_to, np.zeros(3)
+            self.face_start = len(self.positions) + step.new_face_from
+        self.positions += [f.point_m for f in step.fits]
+        self.axes += [f.torch_axis for f in step.fits]
+        self.bridged += [f.bridged for f in step.fits]
+        if extension.joint == JointKind.V_GROOVE:
+            self.templates += [groove_template(extension.surface, f, self.direction)
+                               for f in step.fits if not f.bridged]  # fmt: skip
+        fitted = self.fitted
+        if len(fitted) >= 3:
+            self.direction, self.bend = end_curve(fitted)
+
+
+def extend_end(extension: Extension, seam_positions, seam_axes) -> tuple[list[Step], Step | None]:
+    """The steps that extend a seam (points and axes in travel order) beyond its last point
+    (see the module), and the step that stopped it where it came within two steps of the seam
+    away from this end (None if it stopped otherwise)."""
+    positions = np.array(seam_positions)
+    params = extension.params
+    # The seam away from this end: an extension that reaches it has gone round a loop.
+    arc = arc_lengths(positions)
+    elsewhere = positions[arc < arc[-1] - 2 * END_BASELINE_M]
+    elsewhere_tree = cKDTree(elsewhere) if len(elsewhere) else None
+    end = SeamEnd(list(seam_positions), list(seam_axes), [False] * len(positions), *end_curve(positions),
+                  templates=_end_templates(extension, positions, np.array(seam_axes)))  # fmt: skip
+    steps: list[Step] = []
+    for _ in range(int(params.max_extension_m / params.step_m)):
+        step = next((found for strategy in STRATEGIES if (found := strategy(extension, end)) is not None), STOP)
+        if step is STOP:
+            break
+        if elsewhere_tree is not None and elsewhere_tree.query([f.point_m for f in step.fits])[0].min() <= 2 * params.step_m:
+            return steps, step
+        steps.append(step)
+        end.add(step, extension)
+    return steps, None
+
+
+def _next_step(extension: Extension, end: SeamEnd) -> Step | None:
+    """The next fit ahead along the predicted curve (seek.next_fit, bridged over dropouts)."""
+    direction, bend = end.heading()
+    fit = next_fit(extension, end.positions[-1], end.axes[-1], direction, bend, end.template())
+    return None if fit is None else Step([fit])
+
+
+def _turn_step(extension: Extension, end: SeamEnd) -> Step | None:
+    """The seam on the face beyond a 90-degree edge (turn.turned_run), the corner put in where
+    the two lines meet (the sections at the edge itself fail)."""
+    direction, _ = end.heading()
+    turned = turned_run(extension, end.positions[-1], end.axes[-1], direction)
+    if turned is None:
+        return None
+    fits, travel = turned
+    reach = extension.params.edge_search_m + 3 * extension.params.step_m
+    corner = bend_corner(end.positions[-1], direction, fits[0].point_m, -travel, reach)
+    if corner is not None:
+        fits.insert(0, SectionFit(extension.joint, corner, unit(end.axes[-1] + fits[0].torch_axis)))
+    return Step(fits, turned_to=travel, new_face_from=int(corner is not None))
+
+
+def _part_end_step(extension: Extension, end: SeamEnd) -> Step | None:
+    """STOP where the scan sees past the part's end within part_end_reach_m ahead (bridge.
+    part_ends_ahead): in a hole the camera sees nothing, past the part's end it sees what lies
+    beyond (the table), and a seam on another part in line beyond that gap is another seam."""
+    template = end.template()
+    direction, _ = end.heading()
+    reach = extension.params.part_end_reach_m
+    if template is not None and part_ends_ahead(extension.surface, end.positions[-1], direction, end.axes[-1],
+                                                template, reach):  # fmt: skip
+        return STOP
+    return None
+
+
+def _hole_step(extension: Extension, end: SeamEnd) -> Step | None:
+    """The seam carried across a hole in the scan over the whole seam (holes.across_hole), up to
+    max_hole_m long, aimed along the end's curve and along the curve of the fits before the
+    hole's edge."""
+    direction, _ = end.heading()
+    aims = [(end.positions[-1], direction, end.bend), hole_aim(end.fitted)]
+    fits = across_hole(extension, end.positions[-1], end.axes[-1], [aim for aim in aims if aim is not None])
+    return None if fits is None else Step(fits, hole=hole_of(end.positions[-1], fits))
+
+
+STRATEGIES = (_next_step, _turn_step, _part_end_step, _hole_step)
+
+
+def _arc_since_fit(positions: list[np.ndarray], bridged: list[bool]) -> float:
+    """Arc length (m) from the last fitted (not bridged) point to the last point."""
+    fitted = np.flatnonzero(~np.array(bridged))
+    first = fitted[-1] if len(fitted) else 0
+    return float(polyline_length(np.array(positions[first:]))) if first < len(positions) - 1 else 0.0
+
+
+def _end_templates(extension: Extension, positions, axes) -> list[GrooveTemplate | None]:
+    """Groove templates at the last TEMPLATE_MEMORY seam points (none for other joints)."""
+    if extension.joint != JointKind.V_GROOVE:
+        return []
+    tail = slice(max(0, len(positions) - TEMPLATE_MEMORY), len(positions))
+    travel, tail_axes, lateral = section_frames(positions[tail], axes[tail], closed=False)
+    fits = extension.surface.fit_many(positions[tail], travel, tail_axes, lateral, {JointKind.V_GROOVE})
+    return [groove_template(extension.surface, fit, t) for fit, t in zip(fits, travel)
+            if fit.kind == JointKind.V_GROOVE]  # fmt: skip

@@ -1,0 +1,129 @@
+"""Crossing a hole in the scan over the whole seam: the seam is carried across when it fits again
+beyond, and the stretch in between is interpolated."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from weldseam.geometry import arc_lengths, polyline_length, unit
+from weldseam.pipeline.bridge import groove_bottom, sees_past_end
+from weldseam.pipeline.ends import ahead, end_curve
+from weldseam.pipeline.joints import JointGeometry, JointKind
+from weldseam.pipeline.section import SectionFit
+from weldseam.pipeline.seek import Extension, next_fit, offsets, plain_fit
+from weldseam.pipeline.trace import Hole
+
+# The seam must fit this many times in a row beyond a hole (or up to the part's end), and the seam
+# line across it hold no more than HOLE_STRAYS points within HOLE_RADIUS_M (across_hole).
+HOLE_CONFIRM = 2
+HOLE_RADIUS_M = 0.0015
+HOLE_STRAYS = 2
+# A hole's edge cuts the sections beside it short (one groove wall seen, the other not), so the
+# fits within this much arc of it may lean sideways: a hole is aimed across from the fits before.
+HOLE_EDGE_M = 0.006
+
+
+def hole_aim(fitted: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """(origin, direction, bend) of a curve to seek the seam along across a hole after the
+    `fitted` seam points (travel order): from the last of them more than HOLE_EDGE_M of arc
+    before the end, along the seam's curve there (end_curve of the fits up to it); None when
+    fewer than three fits lie before the edge."""
+    arc = arc_lengths(fitted[::-1])
+    before = fitted[: len(fitted) - int(np.searchsorted(arc, HOLE_EDGE_M, side="right"))]
+    return (before[-1], *end_curve(before)) if len(before) >= 3 else None
+
+
+def across_hole(extension: Extension, last_point, last_axis, aims) -> list[SectionFit] | None:
+    """Bridged points across a hole in the scan after `last_point` followed by the first
+    HOLE_CONFIRM fits beyond it, or None.
+
+    Sections are tried from max_skip_m to max_hole_m ahead of the end along the curve of the
+    first of `aims` (origin, direction, bend: ends.ahead from the origin, the end's distance from
+    it added). The first section that fits the joint within 25 % of its distance sideways and 5 %
+    in depth of any aim's prediction (the fits at a hole's edge may lean, and the aim from before
+    them finds the seam where the end's own tangent misses it: hole_aim) must be followed by
+    HOLE_CONFIRM - 1 more fits in a row, or by the part's end (_part_ends_after): a hole can reach
+    to within a section or two of the plate's end, and the scan then sees past the plate right
+    after the fits (a stray fit inside a longer hole has nothing after it). The hole is bridged by
+    a cubic Hermite curve between the two ends and their travel directions on that aim (torch axes
+    interpolated), and that curve must be empty: no more than HOLE_STRAYS scan points within
+    HOLE_RADIUS_M of it. For a groove the seam point is the centre of the opening, in the air over
+    the groove; where a plate's surface crosses the line, the groove has ended, and one ahead is
+    another seam."""
+    params = extension.params
+    step = params.step_m
+    leads = [max(0.0, float((last_point - origin) @ direction)) for origin, direction, _ in aims]
+    for distance in np.arange(params.max_skip_m + step, params.max_hole_m + step / 2, step):
+        predicted, travel = ahead(*aims[0], leads[0] + distance)
+        fit = plain_fit(extension, predicted, travel, last_axis)
+        if fit.kind != extension.joint:
+            continue
+        for (origin, direction, bend), lead in zip(aims, leads):
+            predicted, travel = ahead(origin, direction, bend, lead + distance)
+            depth, sideways = offsets(fit.point_m, predicted, travel, last_axis)
+            if sideways <= 0.25 * distance and depth <= max(0.5 * step, 0.05 * distance):
+                break
+        else:
+            continue
+        leaving = ahead(origin, direction, bend, lead)[1]  # the aim's travel at the end
+        run = [fit]
+        while len(run) < HOLE_CONFIRM:
+            following = next_fit(extension, run[-1].point_m, run[-1].torch_axis, travel, bend)
+            if following is None:
+                break
+            run.append(following)
+        if len(run) < HOLE_CONFIRM and not _part_ends_after(extension, run[-1], travel, last_point, last_axis, leaving):
+            return None
+        return _bridge(extension, last_point, last_axis, leaving, run, travel)
+    return None
+
+
+def _bridge(extension: Extension, last_point, last_axis, leaving, run: list[SectionFit], travel):
+    """The bridged points from `last_point` (leaving along `leaving`) to the first fit of `run`
+    on a cubic Hermite curve, then `run`; None when scan points lie on that curve."""
+    fit = run[0]
+    arrival = unit(run[-1].point_m - run[0].point_m) if len(run) > 1 else travel
+    line = _hermite(last_point, leaving, fit.point_m, arrival, HOLE_RADIUS_M)
+    if extension.surface.tree.query_ball_point(line, HOLE_RADIUS_M, return_length=True).sum() > HOLE_STRAYS:
+        return None
+    bridge = _hermite(last_point, leaving, fit.point_m, arrival, extension.params.step_m)
+    weights = np.linspace(0.0, 1.0, len(bridge) + 2)[1:-1, None]
+    tilts = unit((1 - weights) * last_axis + weights * fit.torch_axis)
+    geometry = JointGeometry(opening_m=2 * fit.half_opening_m)
+    return [SectionFit(extension.joint, p, a, geometry, bridged=True) for p, a in zip(bridge, tilts)] + run
+
+
+def _part_ends_after(extension: Extension, fit, travel, last_point, last_axis, direction) -> bool:
+    """Whether a groove's part ends within part_end_reach_m after `fit`, beyond a hole that began
+    at `last_point`: the scan sees past the part there (bridge.sees_past_end) deeper than the
+    groove's bottom, the deeper of its depths in the fit's section and in the section at
+    `last_point` (a section at a hole's edge may hold only part of the groove; a fit that is not
+    the groove, or not its whole depth, must not pass the groove going on for the part's end)."""
+    if fit.kind != JointKind.V_GROOVE:
+        return False
+    before = extension.surface.fit(last_point, direction, last_axis, {JointKind.V_GROOVE})
+    if before.kind != JointKind.V_GROOVE:
+        return False
+    surface = extension.surface
+    bottoms = [groove_bottom(surface, f, t) for f, t in ((fit, travel), (before, direction))]
+    if None in bottoms:
+        return False
+    return sees_past_end(surface, fit, travel, extension.params.part_end_reach_m, max(bottoms))
+
+
+def hole_of(start: np.ndarray, fits: list[SectionFit]) -> Hole:
+    """The Hole bridged from `start` by the bridged points at the head of `fits`."""
+    line = np.array([start, *(f.point_m for f in fits if f.bridged), next(f.point_m for f in fits if not f.bridged)])
+    middle = line[len(line) // 2]
+    return Hole(tuple(round(float(v), 6) for v in middle), polyline_length(line))
+
+
+def _hermite(start, start_direction, end, end_direction, spacing_m: float) -> np.ndarray:
+    """Points (K, 3) about `spacing_m` apart strictly between `start` and `end` on the cubic
+    Hermite curve leaving `start` along `start_direction` and arriving along `end_direction`
+    (tangent lengths = the chord)."""
+    chord = np.linalg.norm(end - start)
+    count = max(1, int(round(chord / spacing_m)))
+    s = (np.arange(1, count) / count)[:, None]
+    return ((2 * s**3 - 3 * s**2 + 1) * start + (s**3 - 2 * s**2 + s) * chord * start_direction
+            + (3 * s**2 - 2 * s**3) * end + (s**3 - s**2) * chord * end_direction)  # fmt: skip

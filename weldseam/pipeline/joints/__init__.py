@@ -1,0 +1,48 @@
+"""Joint models: each fits a cross-section profile and returns the seam point, the torch axis,
+a residual and the measured geometry, or no fit with the reason.
+
+A model is a module with `KIND` (a JointKind) and `fit(u, w, params) -> ProfileFit | NoFit`
+(u ascending). Adding a joint kind means adding one model module and its entry in MODELS.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Collection
+
+import numpy as np
+
+from weldseam.pipeline.joints import fillet, v_groove
+from weldseam.config import JointsConfig
+from weldseam.pipeline.joints.base import JointGeometry, JointKind, NoFit, ProfileFit
+
+__all__ = ["MODELS", "recentred", "JointGeometry", "JointKind", "NoFit", "ProfileFit", "fit_profile"]
+
+MODELS = (v_groove, fillet)
+MIN_PROFILE_POINTS = 12
+
+
+def fit_profile(
+    u: np.ndarray, w: np.ndarray, params: JointsConfig, kinds: Collection[JointKind] | None = None
+) -> ProfileFit | NoFit:
+    """The joint in one profile (u lateral, w height out of the work, m), or NoFit with every
+    model's reason; `kinds`: only these models are tried (None: all). The models are tried in
+    MODELS order and the first that fits is the joint."""
+    if len(u) < MIN_PROFILE_POINTS:
+        return NoFit("too few points in the section")
+    order = np.argsort(u, kind="stable")
+    u, w = u[order], w[order]
+    reasons = []
+    for model in MODELS:
+        if kinds is not None and model.KIND not in kinds:
+            continue
+        found = model.fit(u, w, params)
+        if isinstance(found, ProfileFit):
+            return found
+        reasons.append(f"{model.KIND.value}: {found.reason}")
+    return NoFit("; ".join(reasons))
+
+
+def recentred(kind: JointKind) -> bool:
+    """Whether a fit of this kind assumes the joint in the middle of its window (its model's
+    CENTRED), so a fit far off the window's centre is fitted again centred on it."""
+    return next(model.CENTRED for model in MODELS if model.KIND == kind)

@@ -1,0 +1,165 @@
+"""The V-groove model: a plate surface on both sides with a depression between them.
+
+A reference line through the plate surface on both sides (an upper-envelope robust fit), a
+depression below it at least `groove_min_depth_m` deep with surface on both sides, and a line
+fitted to each groove wall. Each groove edge is where its wall line meets the reference line
+(where a wall is hidden, the last surface point before the hole). The seam point is the
+midpoint of the two edges on the reference line; the torch axis is perpendicular to the
+reference line, fitted within `face_radius_m` beside the edges.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from weldseam.config import JointsConfig
+from weldseam.pipeline.joints.base import JointGeometry, JointKind, NoFit, ProfileFit
+from weldseam.pipeline.joints.robust import line, median, noise, upper_decile
+
+KIND = JointKind.V_GROOVE
+# The surface line is fitted to the outer halves of the window: the groove must sit in its middle.
+CENTRED = True
+# The least noise a plate surface is taken to have: depth quantised in 1 mm steps (RealSense
+# and most structured-light cameras), seen square on, leaves most of a flat surface on one level
+# and the next 1 mm below; the median deviation is then ~0 and that level would pass for a
+# depression. 1 mm / sqrt(12) = 0.29 mm.
+SURFACE_NOISE_FLOOR_M = 0.0003
+# A groove edge put at the last surface point may lie this far beyond the mirror image of the
+# other edge about the groove bottom (_groove_edges). With one wall hidden, the bottom (the
+# median of the deepest points) sits up the visible wall, measured up to 1.2 mm, so the mirror
+# falls up to ~2.5 mm short; the edges scatter by ~0.5 mm more.
+HIDDEN_EDGE_SLACK_M = 0.004
+# Points of a depression closer than this across the section belong to one groove.
+GROOVE_GAP_M = 0.004
+
+
+def fit(u: np.ndarray, w: np.ndarray, params: JointsConfig) -> ProfileFit | NoFit:
+    """The V-groove in a profile (u ascending), or why there is none."""
+    surface = surface_line(u, w, params.groove_min_depth_m)
+    if isinstance(surface, NoFit):
+        return surface
+    intercept, slope, on_surface, residual, depth_limit, sigma = surface
+    depth = -residual
+    deep = np.flatnonzero(depth > depth_limit)
+    if len(deep) < 4:
+        return NoFit("no depression below the surface")
+    groove = _largest_run(u, deep)
+    u_start, u_end = u[groove[0]], u[groove[-1]]
+    left_surface = on_surface & (u < u_start)
+    right_surface = on_surface & (u > u_end)
+    if np.count_nonzero(left_surface) < 4 or np.count_nonzero(right_surface) < 4:
+        return NoFit("no plate surface on both sides of the depression")
+    deepest = upper_decile(depth[groove])
+    if deepest < params.groove_min_depth_m:
+        return NoFit("depression shallower than joints.groove_min_depth_m")
+    edges = _groove_edges(u, depth, groove, u[left_surface].max(), u[right_surface].min(), slope)
+    if isinstance(edges, NoFit):
+        return edges
+    u_left, u_right, slopes = edges
+    # The surface beside the seam, within face_radius of each edge, sets the torch axis.
+    face = params.face_radius_m
+    beside = on_surface & (((u >= u_left - face) & (u <= u_left)) | ((u >= u_right) & (u <= u_right + face)))
+    if np.count_nonzero(beside) >= 6:
+        intercept, slope = line(u[beside], w[beside])
+    centre_u = (u_left + u_right) / 2
+    norm = np.hypot(1.0, slope)
+    walls = [abs(s) for s in slopes if s is not None]
+    included = 180.0 - float(np.degrees(np.arctan(walls).sum())) if len(walls) == 2 else None
+    geometry = JointGeometry(opening_m=u_right - u_left, depth_m=deepest, included_deg=included)
+    return ProfileFit(KIND, centre_u, intercept + slope * centre_u, slope / norm, -1.0 / norm, sigma, geometry)
+
+
+def surface_line(u: np.ndarray, w: np.ndarray, min_depth_m: float):
+    """(intercept, slope, on_surface, residual, depth_limit, sigma) of the plate surface line
+    through the profile, or NoFit: an upper envelope, started from the outer halves, that
+    repeatedly ignores points below the line (deeper than max(3 sigma, 0.4 min_depth))."""
+    half_width = max(abs(u[0]), abs(u[-1]))
+    on_surface = np.abs(u) > half_width / 2
+    if np.count_nonzero(on_surface) < 6:
+        return NoFit("too few points beside the section centre")
+    for _ in range(6):
+        intercept, slope = line(u[on_surface], w[on_surface])
+        residual = w - (intercept + slope * u)
+        sigma = max(noise(residual[on_surface]), SURFACE_NOISE_FLOOR_M)
+        depth_limit = max(3 * sigma, 0.4 * min_depth_m)
+        updated = (residual > -depth_limit) & (residual < 4 * sigma + depth_limit)
+        if np.count_nonzero(updated) < 6 or np.array_equal(updated, on_surface):
+            break
+        on_surface = updated
+    return intercept, slope, on_surface, residual, depth_limit, sigma
+
+
+def _largest_run(u: np.ndarray, deep: np.ndarray) -> np.ndarray:
+    """The largest run of deep points with gaps under GROOVE_GAP_M between them (the first of
+    the largest)."""
+    breaks = np.flatnonzero(np.diff(u[deep]) > GROOVE_GAP_M) + 1
+    if not len(breaks):
+        return deep
+    bounds = np.concatenate(([0], breaks, [len(deep)]))
+    longest = int(np.argmax(np.diff(bounds)))
+    return deep[bounds[longest] : bounds[longest + 1]]
+
+
+def _groove_edges(u, depth, groove, left_surface_end, right_surface_end, surface_slope: float):
+    """(left edge, right edge, [left wall slope, right wall slope]) where each groove wall meets
+    the surface (depth 0), or NoFit when neither wall is seen: a bevelled wall facing the camera
+    is always visible, so a depression with two hidden (vertical) walls is a hole or a slot, not
+    a V-groove.
+
+    Each wall is the points between the last surface point and the groove bottom (its middle
+    15-80 %); a robust line depth = c + m u through them is solved for depth 0.
+    A wall too short to fit on its own takes the other wall's slope mirrored (bevels are
+    symmetric) and fits only its offset. A hidden wall (no points: it faces away from the
+    camera) ends at the last surface point, which the camera sees right up to the edge.
+    Such an edge (or one whose wall line meets the surface out of range) lying more than
+    HIDDEN_EDGE_SLACK_M beyond the mirror image of the other edge about the groove bottom is
+    not seen: a dropout or a shadow goes on past it onto the plate, and there is no fit. The
+    bottom is mirrored about its foot on the surface line w = c + s u (`surface_slope` s;
+    `depth` is measured vertically from that line): u - depth s / (1 + s^2).
+    The last surface point is not used for a visible wall: its shallowest points pass for
+    surface, so that point lies ~1 mm inside the edge, and the bias differs side to side.
+    """
+    deepest = upper_decile(depth[groove])
+    bottom = median(u[groove][depth[groove] >= 0.8 * deepest])
+    # Wall points are chosen by position across the groove, never by depth: choosing by the
+    # fitted variable would bias the line where the noise differs between the walls.
+    walls = []
+    for surface_end in (left_surface_end, right_surface_end):
+        near, far = surface_end + 0.15 * (bottom - surface_end), surface_end + 0.8 * (bottom - surface_end)
+        low, high = sorted((near, far))
+        walls.append(np.flatnonzero((u >= low) & (u <= high)))
+    slopes = [_wall_slope(u[wall], depth[wall], side) for wall, side in zip(walls, (-1, 1))]
+    if slopes == [None, None]:
+        return NoFit("neither groove wall seen")
+    edges, at_surface_end = [], []
+    for side, wall, slope, other, surface_end in zip(
+        (-1, 1), walls, slopes, slopes[::-1], (left_surface_end, right_surface_end)
+    ):
+        if slope is None and other is not None and len(wall) >= 2:
+            slope = -other
+        edge = None
+        if slope is not None:
+            edge = -median(depth[wall] - slope * u[wall]) / slope
+            # Between 3 mm outside the last surface point and the middle of the wall.
+            low, high = sorted((surface_end + side * 0.003, float(np.add.reduce(u[wall])) / len(wall)))
+            edge = edge if low <= edge <= high else None
+        at_surface_end.append(edge is None)
+        edges.append(float(surface_end if edge is None else edge))
+    foot = bottom - deepest * surface_slope / (1 + surface_slope**2)
+    for side, edge, other, unseen in zip((-1, 1), edges, edges[::-1], at_surface_end):
+        if unseen and side * (edge - (2 * foot - other)) > HIDDEN_EDGE_SLACK_M:
+            return NoFit("a hidden groove wall's edge lies beyond the other's mirror image (a dropout)")
+    return edges[0], edges[1], slopes
+
+
+def _wall_slope(u: np.ndarray, depth: np.ndarray, side: int) -> float | None:
+    """Slope of a robust line through one wall's points (`u` ascending), or None when there are
+    too few or the line is not steep toward the middle (at least 11 degrees)."""
+    if len(u) < 4 or u[-1] - u[0] < 0.0006:
+        return None
+    intercept, slope = line(u, depth)
+    residual = depth - (intercept + slope * u)
+    inliers = np.abs(residual) <= 2.5 * noise(residual)
+    if np.count_nonzero(inliers) >= 4:
+        intercept, slope = line(u[inliers], depth[inliers])
+    return slope if slope * side < -0.2 else None

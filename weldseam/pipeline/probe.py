@@ -1,0 +1,50 @@
+"""Probe: a few sections along every candidate chain, before tracing any of them.
+
+Most candidates are plate or table edges; a chain where none of its probe sections fits a joint
+is not a seam, and is rejected without fitting a section at every point. The probes are fitted
+in one batch for all chains (half on the worker process) and reused by the trace.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+
+from weldseam.geometry import unit
+from weldseam.pipeline.order import Chain
+from weldseam.pipeline.section import FineSurface, SectionFit, section_frames
+
+PROBE_SECTIONS = 3
+
+
+def approximate_torch_axes(centres: list[np.ndarray], normals, tree, radius_m) -> list[np.ndarray]:
+    """For each (K, 3) array of `centres`, the negated mean normal of the working surface within
+    `radius_m` of each centre (`tree` over the points that have the (N, 3) `normals`): the plate
+    normal beside a groove, the bisector of the faces at a corner; pointing into the work. One
+    search for all (each search starts its own threads)."""
+    if not centres:
+        return []
+    everywhere = np.concatenate(centres)
+    neighbourhoods = tree.query_ball_point(everywhere, radius_m, workers=-1)
+    counts = np.fromiter(map(len, neighbourhoods), np.intp, len(neighbourhoods))
+    members = np.fromiter(itertools.chain.from_iterable(neighbourhoods), np.intp, counts.sum())
+    owner = np.repeat(np.arange(len(everywhere)), counts)
+    # bincount adds each centre's normals in member order, as a sum over them would.
+    sums = np.column_stack([np.bincount(owner, normals[members, k], len(everywhere)) for k in range(3)])
+    return np.split(unit(-sums), np.cumsum([len(c) for c in centres])[:-1])
+
+
+def probe_chains(chains: list[Chain], approx_axes: list[np.ndarray], surface: FineSurface) -> list[dict[int, SectionFit]]:
+    """For each chain, the fits of PROBE_SECTIONS evenly spaced sections along it, by chain point
+    index, in the frames trace_chain uses (so it reuses them)."""
+    probes = []
+    for chain, axes in zip(chains, approx_axes):
+        travel, frame_axes, lateral = section_frames(chain.points, axes, chain.closed)
+        at = np.unique(np.linspace(0, len(chain.points) - 1, PROBE_SECTIONS).round().astype(int))
+        probes.append((at, (chain.points[at], travel[at], frame_axes[at], lateral[at])))
+    if not probes:
+        return []
+    frames = (np.concatenate(part) for part in zip(*(frame for _, frame in probes)))
+    fits = iter(surface.fit_many(*frames))
+    return [{int(k): next(fits) for k in at} for at, _ in probes]

@@ -1,0 +1,68 @@
+"""Seeking a seam ahead of a known end: the sections an extension tries, and when a fit counts."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from weldseam.config import ExtendConfig
+from weldseam.geometry import unit
+from weldseam.pipeline.bridge import GrooveTemplate, fit_or_bridge
+from weldseam.pipeline.ends import ahead
+from weldseam.pipeline.joints import JointKind
+from weldseam.pipeline.section import FineSurface, SectionFit
+
+
+@dataclass(frozen=True)
+class Extension:
+    """What an extension seeks: the surface it fits sections on, the seam's joint, the parameters."""
+
+    surface: FineSurface
+    joint: JointKind
+    params: ExtendConfig
+
+
+def next_fit(extension: Extension, last_point, last_axis, direction, bend, template: GrooveTemplate | None = None):
+    """The next fit along the predicted curve from the end (ends.ahead), stepping over failed
+    sections up to max_skip_m, or None. Where a section fails and the groove's template is known,
+    it is bridged (a dropout over part of the groove: bridge.fit_or_bridge).
+
+    A fit counts when it lies within max(1.5 steps, 15 % of the distance from the last fit) of the
+    prediction sideways (the fit is a verified joint profile and the better estimate: near an end
+    the prediction drifts by 1-3 mm; the bound follows curves of radius down to ~40 mm across the
+    largest gap), and within max(half a step, 20 % of the distance) along the torch axis (the
+    surface does not jump, a section that straddles the part's end face does; but an end tangent
+    fitted to end points that drift in depth leans into the work, 1-2 mm over a 12 mm gap)."""
+    step = extension.params.step_m
+    distance = step
+    while distance <= extension.params.max_skip_m:
+        predicted, travel = ahead(last_point, direction, bend, distance)
+        fit, depth, sideways = section_at(extension, predicted, travel, last_axis, template)
+        near = sideways <= max(1.5 * step, 0.15 * distance) and depth <= max(0.5 * step, 0.2 * distance)
+        if fit.kind == extension.joint and near:
+            return fit
+        distance += step
+    return None
+
+
+def section_at(extension: Extension, predicted, travel, axis, template: GrooveTemplate | None = None):
+    """(fit, depth, sideways) of the section at `predicted` seeking the extension's joint (bridged
+    with a template where it does not fit); depth and sideways are the fit's offsets (m) from the
+    prediction along and across the axis."""
+    fit = fit_or_bridge(extension.surface, predicted, travel, axis, template, {extension.joint})
+    return fit, *offsets(fit.point_m, predicted, travel, axis)
+
+
+def offsets(point, predicted, travel, axis) -> tuple[float, float]:
+    """(depth, sideways): the offsets (m) of `point` from `predicted` along the torch `axis`
+    (made perpendicular to `travel`) and across it."""
+    axis = unit(axis - (axis @ travel) * travel)
+    offset = point - predicted
+    depth = abs(offset @ axis)
+    return depth, np.linalg.norm(offset - (offset @ axis) * axis)
+
+
+def plain_fit(extension: Extension, centre, travel, axis) -> SectionFit:
+    """The section at `centre` fitted for the extension's joint alone (no bridging)."""
+    return extension.surface.fit(centre, travel, axis, {extension.joint})

@@ -1,0 +1,70 @@
+"""Split: the final seams, one per branch at T and Y junctions, with the holes each crossed.
+
+Fragments that joined nothing are noise, and a piece too short to be a seam is no branch: they
+are dropped before splitting (one would be dropped after splitting a real seam). A seam is split
+where another seam ends on its interior; the pieces each carry the holes in the scan whose middle
+lies on them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from weldseam.config import SplitConfig
+from weldseam.pipeline.trace import Hole, TracedSeam
+
+
+def split_seams(seams: list[TracedSeam], holes: list[Hole], params: SplitConfig, step_m: float) -> list[TracedSeam]:
+    """The seams without fragments, split at junctions, each long enough and with the holes whose
+    middle lies within `step_m` (the spacing of the points bridged across them) of one of its points."""
+    seams = [seam for seam in seams if seam.length_m >= max(params.min_branch_m, params.min_seam_length_m)]
+    seams = split_at_junctions(seams, tolerance_m=params.junction_m)
+    return [_with_holes(seam, holes, step_m) for seam in seams if seam.length_m >= params.min_seam_length_m]
+
+
+def split_at_junctions(seams: list[TracedSeam], *, tolerance_m: float) -> list[TracedSeam]:
+    """Split a seam where another seam ends on its interior (a T or Y junction): each
+    branch becomes its own seam, meeting at the junction."""
+    result = list(seams)
+    changed = True
+    while changed:
+        changed = False
+        for index, seam in enumerate(result):
+            if len(seam.positions_m) < 4:
+                continue
+            ends = [piece.positions_m[k] for other, piece in enumerate(result) if other != index for k in (0, -1)]
+            if not ends:
+                continue
+            distance, nearest = cKDTree(seam.positions_m).query(np.array(ends))
+            inner = (distance <= tolerance_m) & (nearest >= 2) & (nearest <= len(seam.positions_m) - 3)
+            if seam.closed or not inner.any():
+                continue
+            cut = int(nearest[inner][0])
+            head = TracedSeam(seam.positions_m[: cut + 1], seam.torch_axes[: cut + 1], False, seam.joint, seam.confidence,
+                              sources=seam.sources)
+            tail = TracedSeam(seam.positions_m[cut:], seam.torch_axes[cut:], False, seam.joint, seam.confidence,
+                              sources=seam.sources)
+            result[index : index + 1] = [head, tail]
+            changed = True
+            break
+    return result
+
+
+def _with_holes(seam: TracedSeam, holes: list[Hole], reach_m: float) -> TracedSeam:
+    """The seam with the holes (crossed by any extension) whose middle lies on it, within a step
+    of one of its points. Pieces of one seam often cross the same hole: longest first, a hole whose
+    middle lies within half a kept one's length of that one's middle is the same hole."""
+    if not holes:
+        return seam
+    seam_tree = cKDTree(seam.positions_m)
+    kept: list[Hole] = []
+    for hole in sorted(holes, key=lambda h: (-h.length_m, h.middle_m)):
+        middle = np.array(hole.middle_m)
+        if seam_tree.query(middle)[0] > reach_m:
+            continue
+        if all(np.linalg.norm(middle - np.array(other.middle_m)) > other.length_m / 2 for other in kept):
+            kept.append(hole)
+    return replace(seam, holes=tuple(kept))
