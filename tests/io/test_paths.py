@@ -53,7 +53,7 @@ def test_json_layout():
     result = make_result()
     document = json.loads(format_path_json(result))
     assert list(document) == ["format", "version", "frame", "units", "input", "params",
-                              "timings_s", "warnings", "seams"]
+                              "timings_s", "warnings", "candidates", "seams"]
     assert document["format"] == "weldseam.path" and document["version"] == weldseam.__version__
     assert (document["frame"], document["units"]) == ("base", "m")
     assert document["input"] == result.record["input"]

@@ -103,7 +103,9 @@ def plan(
         typer.Option(help="Also write a report of the result: .html (interactive, offline) or .png."),
     ] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No messages on stderr except errors.")] = False,
-    verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Per-stage timings on stderr.")] = False,
+    verbose: Annotated[
+        bool, typer.Option("--verbose", "-v", help="Per-step timings and every seam candidate with its fate, on stderr.")
+    ] = False,
 ) -> None:
     """Find the weld seams in a scan and write the ordered torch path."""
     with reported():
@@ -116,7 +118,8 @@ def plan(
         from weldseam.io.paths import write_paths
         from weldseam.io.poses import parse_vector
         from weldseam.io.scan import load_scan
-        from weldseam.pipeline.run import plan_frames, plan_paths
+        from weldseam.pipeline.frames import plan_frames
+        from weldseam.pipeline.run import plan_paths
 
         overrides = command_overrides(settings, fmt, rotation)
         if threshold is not None:
@@ -165,7 +168,7 @@ def plan(
             if dump_stages is not None:
                 write_ply(dump_stages / f"{next(counter):02d}_{stage}.ply", points, values=values)
 
-        with _progress(enabled=not quiet) as on_stage:
+        with _progress(enabled=not quiet) as on_stage, _candidates_shown(verbose and not quiet):
             if len(loaded_frames) > 1:
                 source = frames if frames is not None else ",".join(spec.scan for spec in specs)
                 result = plan_frames(
@@ -267,6 +270,7 @@ def _report(result, output: str, seconds: float, verbose: bool) -> None:
     if verbose:
         for name, spent in result.timings_s.items():
             stderr(f"  {name:<11} {spent * 1000:8.1f} ms")
+        _print_candidates(result.candidates)
     for path in result.paths:
         stderr(
             f"seam {path.seam_id}: {path.joint}, {'closed, ' if path.closed else ''}{path.length_m * 1000:.1f} mm, "
@@ -274,3 +278,24 @@ def _report(result, output: str, seconds: float, verbose: bool) -> None:
         )
     target = "stdout" if output == "-" else output
     stderr(f"{len(result.paths)} seam(s) in {seconds:.2f} s -> {target}")
+
+
+@contextmanager
+def _candidates_shown(enabled: bool):
+    """With -v, when no seam is found, every candidate and why it was rejected before the error."""
+    from weldseam.errors import NoSeamError
+
+    try:
+        yield
+    except NoSeamError as error:
+        if enabled:
+            _print_candidates(error.candidates)
+        raise
+
+
+def _print_candidates(candidates) -> None:
+    """One line per seam candidate: where it lies (mm), its length, and what became of it."""
+    for number, candidate in enumerate(candidates):
+        x, y, z = (1000 * v for v in candidate.centre_m)
+        stderr(f"  candidate {number} at ({x:.0f}, {y:.0f}, {z:.0f}) mm, {candidate.length_m * 1000:.0f} mm: "
+               f"{candidate.outcome}")

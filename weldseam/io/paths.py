@@ -35,7 +35,8 @@ def format_path_json(result: RunResult) -> bytes:
     """The paths of `result` as a UTF-8 `weldseam.path` JSON document (2-space indent).
 
     Keys: format, version, frame ("base"), units ("m"), input and params (from
-    result.record), timings_s, warnings, seams (id, closed, joint, confidence, length_m,
+    result.record), timings_s, warnings, candidates (every seam candidate: centre, length, the
+    seam it became or why it was rejected), seams (id, closed, joint, confidence, length_m,
     poses of x y z qx qy qz qw rx ry rz). Quaternions are hemisphere-continuous along
     each seam, rotation vectors have angle <= pi.
     """
@@ -48,6 +49,7 @@ def format_path_json(result: RunResult) -> bytes:
         "params": result.record.get("params", {}),
         "timings_s": result.timings_s,
         "warnings": list(result.warnings),
+        "candidates": result.record.get("candidates", []),
         "seams": [
             {"id": path.seam_id, "closed": bool(path.closed), "joint": path.joint,
              "confidence": path.confidence, "length_m": path.length_m}

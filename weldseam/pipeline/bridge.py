@@ -194,10 +194,8 @@ def bridge_groove(
         centre_u = (implied[1] + implied[-1]) / 2
     elif len(implied) == 1 and len(ends) == 1:
         ((seen, centre_u),) = implied.items()
-        hidden = -seen * (u - centre_u)
-        expected = template.expected(-seen)
-        if not (_hole_beyond(hidden, surface, expected)
-                or (part_ends and _plate_ended(u, w, hidden, surface, expected, centre_u, template))):
+        if not (_hole_beyond(u, surface, centre_u, seen, template)
+                or (part_ends and _plate_ended(u, w, surface, centre_u, seen, template))):
             return None
     else:
         return None
@@ -212,21 +210,29 @@ def bridge_groove(
                       JointGeometry(opening_m=opening))  # fmt: skip
 
 
-def _hole_beyond(hidden, surface, expected_m: float) -> bool:
+def _hidden_side(u, centre_u: float, seen: int, template: GrooveTemplate) -> tuple[np.ndarray, float]:
+    """(distance of each point beyond the seam on the side not seen, where that side's surface
+    end is expected) for a groove at `centre_u` whose end on side `seen` (-1 or 1) was seen."""
+    return -seen * (u - centre_u), template.expected(-seen)
+
+
+def _hole_beyond(u, surface, centre_u: float, seen: int, template: GrooveTemplate) -> bool:
     """Whether a groove's hidden side is a hole: no points from BRIDGE_MARGIN_M inside to
     BRIDGE_HOLE_M outside its expected surface end, and surface again beyond."""
+    hidden, expected_m = _hidden_side(u, centre_u, seen, template)
     if np.any((hidden > expected_m - BRIDGE_MARGIN_M) & (hidden < expected_m + BRIDGE_HOLE_M)):
         return False
     return np.count_nonzero(surface & (hidden >= expected_m + BRIDGE_HOLE_M)) >= 4
 
 
-def _plate_ended(u, w, hidden, surface, expected_m: float, centre_u: float, template: GrooveTemplate) -> bool:
+def _plate_ended(u, w, surface, centre_u: float, seen: int, template: GrooveTemplate) -> bool:
     """Whether the plate on a groove's hidden side has ended (an end crossing the groove
     obliquely) while the groove's root still lies under the seam: no surface point on that side
     beyond BRIDGE_MARGIN_M inside its expected end, and at least 4 points within BRIDGE_MARGIN_M
     of the seam line up to PAST_END_MARGIN_M above the groove's bottom, none counted below it
     (past a square end, the table under a thin root face lies just below the root and must not
     pass for it)."""
+    hidden, expected_m = _hidden_side(u, centre_u, seen, template)
     if template.bottom_m is None or np.any(surface & (hidden > expected_m - BRIDGE_MARGIN_M)):
         return False
     intercept, slope = line(u[surface], w[surface])

@@ -55,6 +55,14 @@ def candidate_of(points: np.ndarray, closed: bool = False) -> Candidate:
     return Candidate(tuple(round(float(v), 6) for v in middle), polyline_length(points, closed))
 
 
+def cluster_candidate(points: np.ndarray) -> Candidate:
+    """A Candidate for a cluster of working points: its mean and its extent along its principal axis."""
+    centred = points - points.mean(axis=0)
+    axis = np.linalg.svd(centred, full_matrices=False)[2][0]
+    centre = points.mean(axis=0)
+    return Candidate(tuple(round(float(v), 6) for v in centre), float(np.ptp(centred @ axis)))
+
+
 def commonest_reasons(candidates: list[Candidate], count: int = 3) -> str:
     """e.g. '4 no joint model fits its sections, 2 shorter than ...': the commonest rejections."""
     tally = Counter(c.rejection for c in candidates if c.rejection is not None)

@@ -9,9 +9,8 @@ PlanState and adds its own results; a step that fails is reported with its name.
 
 from __future__ import annotations
 
-import hashlib
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass, field, replace
 
@@ -21,10 +20,9 @@ from scipy.spatial import cKDTree
 from weldseam import __version__
 from weldseam.config import PlanConfig, config_to_dict
 from weldseam.errors import InputError, NoSeamError, StageError, WeldseamError
-from weldseam.geometry import polyline_length, transform_points
+from weldseam.geometry import polyline_length
 from weldseam.pipeline import boundary, candidates, condition, descriptor, extend, grid, join, normals, order
 from weldseam.pipeline import pairing, probe, resample, segment, smooth, split, support, thinning, trace
-from weldseam.pipeline.merge import merge_frames
 from weldseam.pipeline.candidates import Candidate, Rejection
 from weldseam.pipeline.neighbours import pairs_among, pairs_graph, radius_graph, radius_pairs
 from weldseam.pipeline.parallel import in_background, worker_process
@@ -146,7 +144,7 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
         state.working, state.descriptor > state.threshold,
         tolerance_m=c.segment.cluster_tolerance_m, min_length_m=c.segment.min_seam_length_m,
     )
-    state.short_candidates = [replace(_cluster_candidate(state.working[members]), rejection=Rejection.TOO_SHORT)
+    state.short_candidates = [replace(candidates.cluster_candidate(state.working[members]), rejection=Rejection.TOO_SHORT)
                               for members in short]  # fmt: skip
     state.working_tree = cKDTree(state.working)
     state.dump("segment", state.working[np.concatenate(state.clusters)] if state.clusters else np.empty((0, 3)), None)
@@ -323,7 +321,7 @@ STAGES = tuple(dict.fromkeys(step.name for step in STEPS))  # the timing keys, i
 
 
 @contextmanager
-def _stage(name: str, timings: dict[str, float], on_stage: Callable[[str], None] | None):
+def timed_step(name: str, timings: dict[str, float], on_stage: Callable[[str], None] | None):
     """Run one stage: announce it, add its time to timings[name], and turn a numerical failure
     inside it into a StageError that names it."""
     if on_stage:
@@ -357,16 +355,18 @@ def plan_paths(
     with ExitStack() as resources:
         state = PlanState(scan, config, resources, dump or (lambda *_: None))
         for step in STEPS:
-            with _stage(step.name, timings, on_stage):
+            with timed_step(step.name, timings, on_stage):
                 step.run(state, config)
     found = [*state.short_candidates, *state.chain_candidates]
     if not state.paths and not allow_empty:
         rejected = [c for c in found if c.rejection is not None]
-        reasons = f": {candidates.commonest_reasons(rejected)}" if rejected else ""
-        raise NoSeamError(
-            f"{scan.source or 'scan'}: no weld seam found ({len(rejected)} candidate(s) rejected{reasons})",
-            tuple(found),
-        )
+        if rejected:
+            why = f"{len(rejected)} candidate(s) rejected: {candidates.commonest_reasons(rejected)}"
+        elif config.segment.threshold is None:
+            why = f"nothing in the scan bends like a crease of segment.min_crease_deg ({config.segment.min_crease_deg:g} deg)"
+        else:
+            why = f"nothing in the scan is above the descriptor threshold {config.segment.threshold:g}"
+        raise NoSeamError(f"{scan.source or 'scan'}: no weld seam found ({why})", tuple(found))
     record = {
         "weldseam_version": __version__,
         "input": {"path": scan.source, "sha256": scan.sha256, "points": int(len(scan.points_m))},
@@ -379,76 +379,12 @@ def plan_paths(
                      candidates=tuple(found), descriptor=(state.working, state.descriptor))  # fmt: skip
 
 
-def plan_frames(
-    frames: Sequence[Scan],
-    config: PlanConfig,
-    *,
-    source: str,
-    dump: Dump | None = None,
-    on_stage: Callable[[str], None] | None = None,
-    allow_empty: bool = False,
-) -> RunResult:
-    """Merge several frames of one workpiece (each in the base frame with its (3,) camera
-    origin) with `merge_frames`, then run `plan_paths` on the merged cloud. The record's
-    input lists the frames with the ICP correction of each (how far it moved the frame's
-    centroid, mm, and its rotation, degrees); `source` names the whole (the manifest, or the
-    scans)."""
-    from scipy.spatial.transform import Rotation
-
-    if any(frame.camera_origin_m is None for frame in frames):
-        raise InputError(f"{source}: every frame needs its pose to be merged with the others")
-    m = config.merge
-    spent: dict[str, float] = {}
-    with _stage("merge", spent, on_stage):
-        merged = merge_frames(
-            [frame.points_m for frame in frames], np.array([frame.camera_origin_m for frame in frames]),
-            dedup_voxel_m=m.dedup_voxel_m, icp_voxel_m=m.icp_voxel_m, icp_max_distance_m=m.icp_max_distance_m,
-            min_overlap=m.min_overlap, max_incidence_deg=m.max_incidence_deg, refine=m.refine,
-        )
-    if dump is not None:
-        dump("merge", merged.points_m, merged.frame.astype(np.float64))
-    digest = hashlib.sha256("".join(frame.sha256 for frame in frames).encode()).hexdigest()
-    scan = Scan(points_m=merged.points_m, camera_origin_m=merged.camera_origins_m, source=source, sha256=digest)
-    result = plan_paths(scan, config, dump=dump, on_stage=on_stage, allow_empty=allow_empty)
-    warnings = [
-        f"{frame.source}: it overlaps the frames before it too little to refine its pose "
-        f"({overlap:.0%} of its points, merge.min_overlap {m.min_overlap:.0%}): its pose is used as given"
-        for k, (frame, overlap) in enumerate(zip(frames, merged.overlap))
-        if k > 0 and m.refine and not merged.refined[k]
-    ]
-    frames_record = [
-        {
-            "path": frame.source, "sha256": frame.sha256, "points": int(len(frame.points_m)),
-            "kept_points": int((merged.frame == k).sum()),
-            "icp_shift_mm": round(float(np.linalg.norm(transform_points(correction, centre) - centre)) * 1000, 6),
-            "icp_rotation_deg": round(float(np.degrees(Rotation.from_matrix(correction[:3, :3]).magnitude())), 6),
-        }
-        for k, (frame, correction) in enumerate(zip(frames, merged.corrections))
-        for centre in [np.nanmean(frame.points_m, axis=0, keepdims=True)]
-    ]
-    record = {**result.record, "input": {**result.record["input"], "frames": frames_record}}
-    timings = {"merge": spent["merge"] + result.timings_s.get("merge", 0.0)}
-    timings.update((name, value) for name, value in result.timings_s.items() if name != "merge")
-    return replace(
-        result, record=record, timings_s=timings,
-        warnings=(*warnings, *result.warnings),
-    )
-
-
-def _cluster_candidate(points: np.ndarray) -> Candidate:
-    """A Candidate for a cluster of working points: its mean and its extent along its principal axis."""
-    centred = points - points.mean(axis=0)
-    axis = np.linalg.svd(centred, full_matrices=False)[2][0]
-    centre = points.mean(axis=0)
-    return Candidate(tuple(round(float(v), 6) for v in centre), float(np.ptp(centred @ axis)))
-
-
 def _chain_candidate(state: PlanState, k: int, rejection: Rejection | None) -> Candidate:
     chain = state.chains[k]
     found = candidates.candidate_of(chain.points, chain.closed)
-    if rejection is Rejection.NO_JOINT:
-        reasons = {fit.reason for fit in state.probes[k].values()}
-        return replace(found, rejection=rejection, detail="; ".join(sorted(reasons)))
+    if rejection is Rejection.NO_JOINT:  # what the middle probe found
+        probes = state.probes[k]
+        return replace(found, rejection=rejection, detail=probes[sorted(probes)[len(probes) // 2]].reason)
     return replace(found, rejection=rejection)
 
 

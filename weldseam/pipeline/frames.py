@@ -1,0 +1,72 @@
+"""Several frames of one workpiece: merged (merge.py), then planned as one scan (run.py)."""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Callable, Sequence
+from dataclasses import replace
+
+import numpy as np
+
+from weldseam.config import PlanConfig
+from weldseam.errors import InputError
+from weldseam.geometry import transform_points
+from weldseam.pipeline.merge import merge_frames
+from weldseam.pipeline.run import Dump, plan_paths, timed_step
+from weldseam.types import RunResult, Scan
+
+
+def plan_frames(
+    frames: Sequence[Scan],
+    config: PlanConfig,
+    *,
+    source: str,
+    dump: Dump | None = None,
+    on_stage: Callable[[str], None] | None = None,
+    allow_empty: bool = False,
+) -> RunResult:
+    """Merge several frames of one workpiece (each in the base frame with its (3,) camera
+    origin) with `merge_frames`, then run `plan_paths` on the merged cloud. The record's
+    input lists the frames with the ICP correction of each (how far it moved the frame's
+    centroid, mm, and its rotation, degrees); `source` names the whole (the manifest, or the
+    scans)."""
+    from scipy.spatial.transform import Rotation
+
+    if any(frame.camera_origin_m is None for frame in frames):
+        raise InputError(f"{source}: every frame needs its pose to be merged with the others")
+    m = config.merge
+    spent: dict[str, float] = {}
+    with timed_step("merge", spent, on_stage):
+        merged = merge_frames(
+            [frame.points_m for frame in frames], np.array([frame.camera_origin_m for frame in frames]),
+            dedup_voxel_m=m.dedup_voxel_m, icp_voxel_m=m.icp_voxel_m, icp_max_distance_m=m.icp_max_distance_m,
+            min_overlap=m.min_overlap, max_incidence_deg=m.max_incidence_deg, refine=m.refine,
+        )
+    if dump is not None:
+        dump("merge", merged.points_m, merged.frame.astype(np.float64))
+    digest = hashlib.sha256("".join(frame.sha256 for frame in frames).encode()).hexdigest()
+    scan = Scan(points_m=merged.points_m, camera_origin_m=merged.camera_origins_m, source=source, sha256=digest)
+    result = plan_paths(scan, config, dump=dump, on_stage=on_stage, allow_empty=allow_empty)
+    warnings = [
+        f"{frame.source}: it overlaps the frames before it too little to refine its pose "
+        f"({overlap:.0%} of its points, merge.min_overlap {m.min_overlap:.0%}): its pose is used as given"
+        for k, (frame, overlap) in enumerate(zip(frames, merged.overlap))
+        if k > 0 and m.refine and not merged.refined[k]
+    ]
+    frames_record = [
+        {
+            "path": frame.source, "sha256": frame.sha256, "points": int(len(frame.points_m)),
+            "kept_points": int((merged.frame == k).sum()),
+            "icp_shift_mm": round(float(np.linalg.norm(transform_points(correction, centre) - centre)) * 1000, 6),
+            "icp_rotation_deg": round(float(np.degrees(Rotation.from_matrix(correction[:3, :3]).magnitude())), 6),
+        }
+        for k, (frame, correction) in enumerate(zip(frames, merged.corrections))
+        for centre in [np.nanmean(frame.points_m, axis=0, keepdims=True)]
+    ]
+    record = {**result.record, "input": {**result.record["input"], "frames": frames_record}}
+    timings = {"merge": spent["merge"] + result.timings_s.get("merge", 0.0)}
+    timings.update((name, value) for name, value in result.timings_s.items() if name != "merge")
+    return replace(
+        result, record=record, timings_s=timings,
+        warnings=(*warnings, *result.warnings),
+    )
