@@ -75,6 +75,15 @@ class DescriptorConfig:
 class SegmentConfig:
     threshold: float | None = _param(None, "descriptor threshold; default: automatic (see segment.py)")
     min_crease_deg: float = _param(20.0, "automatic threshold: the weakest crease that counts as a seam")
+    valleys: bool = _param(
+        True, "also take valleys and ridges (the signed bend, on the crease line) as candidates, each on its own"
+    )
+    noise_factor: float = _param(
+        2.0, "valleys: the bend must be at least this many times the scan's own bend noise (robust sigma)"
+    )
+    min_density: float = _param(
+        0.25, "valleys: a point counts when this share of its neighbours bends the same way (noise is scattered)"
+    )
     cluster_tolerance_m: float = _param(0.006, "Euclidean clustering distance between seam points")
     min_seam_length_m: float = _param(0.02, "candidate creases shorter than this are not traced")
 
@@ -126,7 +135,8 @@ class JointsConfig:
 class TraceConfig:
     min_valid_fraction: float = _param(0.6, "a candidate whose sections fit one joint less often is not a seam")
     max_gap_m: float = _param(0.012, "a run of failed sections longer than this splits a traced seam")
-    max_jump_m: float = _param(0.004, "a seam point this far from the median of its 5 neighbours' is dropped")
+    max_offset_m: float = _param(0.0015, "a seam point this far from the line through its 5 nearest neighbours is dropped")
+    max_turn_deg: float = _param(8.0, "a section whose torch axis turns this far from its 5 neighbours' is dropped")
 
 
 @dataclass(frozen=True)

@@ -3,9 +3,9 @@ import pytest
 
 from tests.test_pipeline_helpers import crease_points
 from weldseam.errors import InputError
-from weldseam.pipeline.descriptor import gradient_descriptor
+from weldseam.pipeline.descriptor import gradient_descriptor, valley_depth
 from weldseam.pipeline.neighbours import radius_graph
-from weldseam.pipeline.normals import estimate_normals
+from weldseam.pipeline.normals import estimate_normals, pca_normals
 
 
 @pytest.mark.parametrize("variant", ["released", "thesis"])
@@ -34,3 +34,37 @@ def test_unknown_variant_is_refused():
     points = crease_points(10, 0.0025)
     with pytest.raises(InputError, match="descriptor.variant"):
         gradient_descriptor(np.tile([0, 0, 1.0], (len(points), 1)), radius_graph(points, 0.01), variant="magic")
+
+
+def folded(bend_deg, spacing=0.0025, half_extent=0.03):
+    """Two half-planes meeting along y: a valley (bend > 0: the right half rises) or a ridge
+    (bend < 0), with normals facing +z (a camera above)."""
+    ticks = np.arange(-half_extent, half_extent + spacing / 2, spacing)
+    u, v = (a.ravel() for a in np.meshgrid(ticks, ticks, indexing="ij"))
+    points = np.column_stack([u, v, np.where(u > 0, u * np.tan(np.radians(bend_deg)), 0.0)])
+    normals = pca_normals(points, radius_graph(points, 0.006))
+    return points, normals * np.where(normals[:, 2:3] < 0, -1.0, 1.0)
+
+
+@pytest.mark.parametrize("bend_deg", [20.0, 45.0, 90.0])
+def test_the_valley_depth_is_positive_in_a_valley_negative_on_a_ridge_and_zero_on_a_plane(bend_deg):
+    for sign in (1, -1):
+        points, normals = folded(sign * bend_deg)
+        depth = valley_depth(points, normals, radius_graph(points, 0.006))
+        fold = (np.abs(points[:, 0]) < 0.0013) & (np.abs(points[:, 1]) < 0.01)
+        inside = (np.abs(points[:, 0]) < 0.022) & (np.abs(points[:, 1]) < 0.022)  # whole neighbourhoods
+        far = inside & (np.abs(points[:, 0]) > 0.015)
+        # On the fold the neighbours lie ~0.42 r tan(bend / 2) off the tangent plane (r = 6 mm).
+        assert sign * np.median(depth[fold]) > 0.2 * 0.006 * np.tan(np.radians(bend_deg / 2))
+        assert np.abs(depth[far]).max() < 1e-9
+    flat, flat_normals = folded(0.0)
+    assert np.abs(valley_depth(flat, flat_normals, radius_graph(flat, 0.006))).max() < 1e-9
+
+
+def test_the_valley_depth_grows_with_the_bend():
+    depths = []
+    for bend_deg in (20.0, 45.0, 90.0):
+        points, normals = folded(bend_deg)
+        fold = (np.abs(points[:, 0]) < 0.0013) & (np.abs(points[:, 1]) < 0.01)
+        depths.append(np.median(valley_depth(points, normals, radius_graph(points, 0.006))[fold]))
+    assert depths[0] < depths[1] < depths[2]

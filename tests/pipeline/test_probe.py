@@ -6,7 +6,7 @@ from weldseam.config import TraceConfig
 from weldseam.pipeline import section
 from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.order import Chain
-from weldseam.pipeline.probe import probe_chains
+from weldseam.pipeline.probe import probe_chains, tracing_order
 from weldseam.pipeline.trace import trace_chain
 
 
@@ -32,3 +32,18 @@ def test_a_chains_probe_fits_are_reused_by_its_trace_and_give_the_same_seam(rng,
     assert np.array_equal(reused[0].positions_m, alone[0].positions_m)
     assert np.array_equal(reused[0].torch_axes, alone[0].torch_axes)
     assert np.abs(reused[0].positions_m[:, 1:]).max() < 0.0005, "on the seam line, at the surface"
+
+
+def test_a_chain_on_the_seam_is_traced_before_a_longer_one_along_its_edge(rng):
+    """A groove along x: a chain along its edge (8 mm off, longer) and one on its seam line; both
+    probes fit the groove, the one on the seam finds it under its own points."""
+    x, y = grid((-0.07, 0.07), (-0.035, 0.035))
+    surface = surface_of(np.column_stack([x, y, -v_depth(y, half_open=0.008, depth=0.006)]))
+    down = [0.0, 0.0, -1.0]
+    on_seam = Chain(np.column_stack([np.arange(-0.04, 0.04, 0.0025), np.zeros(32), np.zeros(32)]), False)
+    along_edge = Chain(np.column_stack([np.arange(-0.06, 0.06, 0.0025), np.full(48, 0.008), np.zeros(48)]), False)
+    chains = [along_edge, on_seam]
+    probes = probe_chains(chains, [np.tile(down, (len(c.points), 1)) for c in chains], surface)
+    assert all(fit.kind == JointKind.V_GROOVE for p in probes for fit in p.values())
+    order = sorted(range(2), key=lambda k: tracing_order(chains[k], probes[k]))
+    assert order == [1, 0]

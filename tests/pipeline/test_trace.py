@@ -15,8 +15,19 @@ def test_a_line_along_a_traced_grooves_edge_is_inside_it_and_a_line_beside_it_is
     edge_line = np.column_stack([along[5:40:3], np.full(12, 0.0085), np.zeros(12)])  # 4 + 4.5 mm aside
     assert inside_traced(edge_line, [seam], beside_m=0.006)
     assert not inside_traced(edge_line + [0.0, 0.002, 0.0], [seam], beside_m=0.006), "a parallel line 10.5 mm off"
-    past_the_end = np.vstack([edge_line, [0.11, 0.0085, 0.0]])
+    beyond = np.column_stack([np.arange(0.112, 0.122, 0.002), np.full(5, 0.0085), np.zeros(5)])
+    past_the_end = np.vstack([edge_line, beyond])  # 30 % of it past the seam's end
     assert not inside_traced(past_the_end, [seam], beside_m=0.006), "a line going on past the seam's end"
     assert not inside_traced(edge_line, [], beside_m=0.006)
 
 
+
+
+def test_a_line_mostly_inside_a_traced_seam_is_inside_it():
+    along = np.arange(0.0, 0.1, STEP_M)
+    seam = TracedSeam(np.column_stack([along, np.zeros(50), np.zeros(50)]), np.tile([0.0, 0.0, -1.0], (50, 1)),
+                      False, JointKind.V_GROOVE, 1.0, half_opening_m=0.004)
+    longer = np.column_stack([np.arange(0.0, 0.115, STEP_M), np.full(58, 0.005), np.zeros(58)])  # 86 % beside it
+    assert inside_traced(longer, [seam], beside_m=0.006)
+    half_outside = np.column_stack([np.arange(0.05, 0.15, STEP_M), np.full(50, 0.005), np.zeros(50)])
+    assert not inside_traced(half_outside, [seam], beside_m=0.006)

@@ -1,4 +1,6 @@
-"""The point cloud gradient descriptor: large where the surface bends, ~0 on planes."""
+"""Where the surface bends: the point cloud gradient descriptor of the published method (any bend,
+unsigned, in a band along each edge of a crease), and the valley depth (signed, on the crease);
+both ~0 on planes."""
 
 from __future__ import annotations
 
@@ -36,6 +38,14 @@ def gradient_descriptor(normals: np.ndarray, graph: sparse.csr_matrix, *, varian
         sigma_global = neighbour_variance(graph, beta)
         per_point = np.sqrt(np.maximum(sigma_local, 0.0) ** 2 + sigma_global**2)
     return neighbour_variance(graph, per_point)
+
+
+def valley_depth(points: np.ndarray, normals: np.ndarray, graph: sparse.csr_matrix) -> np.ndarray:
+    """(N,) h_i = (mean_j p_j - p_i) . n_i over each point's neighbours (rows of `graph`): how far
+    (m) they lie above its tangent plane, toward the camera. > 0 in a valley (a concave crease: a
+    fillet's corner, a groove's bottom), < 0 on a ridge (a plate's edge, a groove's top edge), ~0
+    on planes; largest on the crease line itself. Noise averages out over the neighbours."""
+    return np.einsum("ij,ij->i", neighbour_mean(graph, points) - points, normals)
 
 
 def _normal_cosine_variance(graph, normals: np.ndarray) -> np.ndarray:

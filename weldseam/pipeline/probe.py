@@ -11,7 +11,7 @@ import itertools
 
 import numpy as np
 
-from weldseam.geometry import unit
+from weldseam.geometry import polyline_length, unit
 from weldseam.pipeline.order import Chain
 from weldseam.pipeline.section import FineSurface, SectionFit, section_frames
 
@@ -48,3 +48,13 @@ def probe_chains(chains: list[Chain], approx_axes: list[np.ndarray], surface: Fi
     frames = (np.concatenate(part) for part in zip(*(frame for _, frame in probes)))
     fits = iter(surface.fit_many(*frames))
     return [{int(k): next(fits) for k in at} for at, _ in probes]
+
+
+def tracing_order(chain: Chain, probes: dict[int, SectionFit]) -> tuple:
+    """Sort key of a probed chain: the chains whose probes most often fit, then those lying closest
+    to the seam points their probes found (to the mm), then the longest, go first. A chain along a
+    groove's edge or beside a corner finds the seam too, but a chain on it traces it best, and
+    the chains traced later are skipped where they lie inside it (trace.inside_traced)."""
+    fitted = [(k, fit) for k, fit in probes.items() if fit.kind is not None]
+    offset_mm = np.mean([np.linalg.norm(fit.point_m - chain.points[k]) for k, fit in fitted]) * 1000 if fitted else 0.0
+    return (-len(fitted) / max(len(probes), 1), round(offset_mm), -polyline_length(chain.points))

@@ -20,7 +20,6 @@ from scipy.spatial import cKDTree
 from weldseam import __version__
 from weldseam.config import PlanConfig, config_to_dict
 from weldseam.errors import InputError, NoSeamError, StageError, WeldseamError
-from weldseam.geometry import polyline_length
 from weldseam.pipeline import boundary, candidates, condition, descriptor, extend, grid, join, normals, order
 from weldseam.pipeline import pairing, probe, resample, segment, smooth, split, support, thinning, trace
 from weldseam.pipeline.candidates import Candidate, Rejection
@@ -56,8 +55,11 @@ class PlanState:
     # normals, descriptor, segment, support
     normals: np.ndarray | None = None
     descriptor: np.ndarray | None = None
+    valley: np.ndarray | None = None
     threshold: float | None = None
+    valley_threshold: float | None = None
     clusters: list = field(default_factory=list)
+    creases: list = field(default_factory=list)
     working_tree: object = None
     support: tuple | None = None
     # boundary, pairing, thinning, grid, order
@@ -125,29 +127,50 @@ def _normals(state: PlanState, c: PlanConfig) -> None:
 
 
 def _descriptor(state: PlanState, c: PlanConfig) -> None:
+    """The published gradient descriptor (any bend, in a band along a crease's edges) and the valley
+    depth (signed, on the crease line)."""
     graph = state.neighbourhoods(c.descriptor.radius_m)
     state.descriptor = descriptor.gradient_descriptor(state.normals, graph, variant=c.descriptor.variant)
+    state.valley = descriptor.valley_depth(state.working, state.normals, graph)
     state.dump("descriptor", state.working, state.descriptor)
 
 
 def _segment(state: PlanState, c: PlanConfig) -> None:
-    """Points bending more than the automatic threshold (or segment.threshold), clustered into
-    candidates; clusters too short are recorded as rejected."""
+    """The candidates: bands where the descriptor exceeds the automatic threshold (or
+    segment.threshold), and, apart from them, the valleys and the ridges where the signed bend
+    exceeds its own (a groove's ridge never joins a plate's edge: on a narrow part the descriptor's
+    bands merge). Clusters too short are recorded as rejected."""
     state.threshold = c.segment.threshold
     if state.threshold is None:
-        state.threshold = segment.automatic_threshold(
-            spacing_m=c.condition.working_voxel_m, normals_radius_m=c.normals.radius_m,
-            descriptor_radius_m=c.descriptor.radius_m, variant=c.descriptor.variant,
-            min_crease_deg=c.segment.min_crease_deg,
+        state.threshold = _crease_threshold(c, c.descriptor.variant)
+    state.clusters, short = _clusters(state, c, state.descriptor > state.threshold)
+    if c.segment.valleys:
+        state.valley_threshold = max(
+            _crease_threshold(c, "valley"), segment.noise_floor(state.valley, c.segment.noise_factor)
         )
-    state.clusters, short = segment.cluster_candidates(
-        state.working, state.descriptor > state.threshold,
-        tolerance_m=c.segment.cluster_tolerance_m, min_length_m=c.segment.min_seam_length_m,
-    )
+        graph = state.neighbourhoods(c.descriptor.radius_m)
+        for side in (state.valley > state.valley_threshold, state.valley < -state.valley_threshold):
+            found, too_short = _clusters(state, c, segment.dense_selection(graph, side, c.segment.min_density))
+            state.creases += found
+            short += too_short
     state.short_candidates = [replace(candidates.cluster_candidate(state.working[members]), rejection=Rejection.TOO_SHORT)
                               for members in short]  # fmt: skip
     state.working_tree = cKDTree(state.working)
-    state.dump("segment", state.working[np.concatenate(state.clusters)] if state.clusters else np.empty((0, 3)), None)
+    chosen = [*state.clusters, *state.creases]
+    state.dump("segment", state.working[np.concatenate(chosen)] if chosen else np.empty((0, 3)), None)
+
+
+def _crease_threshold(c: PlanConfig, variant: str) -> float:
+    return segment.automatic_threshold(
+        spacing_m=c.condition.working_voxel_m, normals_radius_m=c.normals.radius_m,
+        descriptor_radius_m=c.descriptor.radius_m, variant=variant, min_crease_deg=c.segment.min_crease_deg,
+    )
+
+
+def _clusters(state: PlanState, c: PlanConfig, selected: np.ndarray):
+    return segment.cluster_candidates(
+        state.working, selected, tolerance_m=c.segment.cluster_tolerance_m, min_length_m=c.segment.min_seam_length_m
+    )
 
 
 def _support(state: PlanState, c: PlanConfig) -> None:
@@ -175,8 +198,9 @@ def _boundary(state: PlanState, c: PlanConfig) -> None:
 
 
 def _pairing(state: PlanState, c: PlanConfig) -> None:
-    """Rim points paired across each band, their midpoints the candidate's centre points (the
-    band itself where it is too narrow to pair)."""
+    """Rim points paired across each descriptor band, their midpoints the candidate's centre points
+    (the band itself where it is too narrow to pair); a valley or ridge band lies on both sides of
+    its crease line, and its points are the centre points as they are."""
     for members, rim in zip(state.clusters, state.rims):
         in_cluster = np.zeros(len(state.working), dtype=bool)
         in_cluster[members] = True
@@ -192,6 +216,7 @@ def _pairing(state: PlanState, c: PlanConfig) -> None:
             midpoints = state.working[members]
         state.centre_points.append(midpoints)
         state.dump("pairing", midpoints, None)
+    state.centre_points += [state.working[members] for members in state.creases]
 
 
 def _thinning(state: PlanState, c: PlanConfig) -> None:
@@ -228,10 +253,11 @@ def _probe(state: PlanState, c: PlanConfig) -> None:
 
 
 def _trace(state: PlanState, c: PlanConfig) -> None:
-    """Longest chains first, each probed chain traced; a chain within face_radius / 2 of the
-    opening of a groove traced before is skipped. The pieces are then taken in chain order."""
+    """The chains on the seams their probes find first (probe.tracing_order), each probed chain
+    traced; a chain within face_radius / 2 of the opening of a groove traced before is skipped. The
+    pieces are then taken in chain order."""
     chains = state.chains
-    by_length = sorted(range(len(chains)), key=lambda k: -polyline_length(chains[k].points))
+    by_length = sorted(range(len(chains)), key=lambda k: probe.tracing_order(chains[k], state.probes[k]))
     pieces: dict[int, list[trace.TracedSeam]] = {}
     traced_so_far: list[trace.TracedSeam] = []
     rejected: dict[int, Rejection] = {}
@@ -372,6 +398,7 @@ def plan_paths(
         "input": {"path": scan.source, "sha256": scan.sha256, "points": int(len(scan.points_m))},
         "camera_origin_m": normals.camera_record(state.camera),
         "threshold": float(state.threshold),
+        "valley_threshold_m": None if state.valley_threshold is None else float(state.valley_threshold),
         "params": config_to_dict(config),
         "candidates": [c.as_record() for c in found],
     }

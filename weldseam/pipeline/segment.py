@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.sparse.csgraph import connected_components
 
-from weldseam.pipeline.descriptor import gradient_descriptor
-from weldseam.pipeline.neighbours import radius_graph
+from weldseam.pipeline.descriptor import gradient_descriptor, valley_depth
+from weldseam.pipeline.neighbours import neighbour_mean, radius_graph
 from weldseam.pipeline.normals import pca_normals
 
 
@@ -15,7 +15,7 @@ def automatic_threshold(
 ) -> float:
     """The descriptor value on the crease line of an ideal, noiseless crease of
     `min_crease_deg` (two half-planes), sampled at the working spacing and run through the
-    same normal and descriptor code as the scan.
+    same normal and descriptor code as the scan (`variant` "valley": the valley depth, m).
 
     A point passes when its surface bends at least as much as that crease does at its fold,
     so the rule is in physical terms (degrees), independent of noise level, point density
@@ -29,9 +29,27 @@ def automatic_threshold(
     points = np.column_stack([u.ravel(), v.ravel(), height.ravel()])
     normals = pca_normals(points, radius_graph(points, normals_radius_m))
     normals *= np.where(normals[:, 2:3] < 0, -1.0, 1.0)
-    values = gradient_descriptor(normals, radius_graph(points, descriptor_radius_m), variant=variant)
+    graph = radius_graph(points, descriptor_radius_m)
+    if variant == "valley":
+        values = valley_depth(points, normals, graph)
+    else:
+        values = gradient_descriptor(normals, graph, variant=variant)
     on_fold = (np.abs(points[:, 0]) <= spacing_m / 2) & (np.abs(points[:, 1]) <= half_extent / 3)
     return float(np.median(values[on_fold]))
+
+
+def noise_floor(values: np.ndarray, factor: float) -> float:
+    """`factor` x the robust standard deviation (1.4826 x the median absolute deviation) of a
+    per-point measure over the scan: most of a scan is plane, where it is noise, so a crease must
+    stand out of that noise to count (a rougher sensor or surface raises the bar)."""
+    return factor * 1.4826 * float(np.median(np.abs(values - np.median(values))))
+
+
+def dense_selection(graph, selected: np.ndarray, min_fraction: float) -> np.ndarray:
+    """The selected points (N,) bool of which at least `min_fraction` of the neighbours (rows of
+    `graph`) are selected too: a crease is a band of neighbouring points that all bend, noise
+    exceeds a threshold at scattered points."""
+    return selected & (neighbour_mean(graph, selected.astype(np.float64)) >= min_fraction)
 
 
 def cluster_candidates(

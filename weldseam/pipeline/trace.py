@@ -15,7 +15,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from weldseam.config import TraceConfig
-from weldseam.geometry import polyline_length
+from weldseam.geometry import polyline_length, unit
 from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.order import Chain
 from weldseam.pipeline.section import FineSurface, SectionFit, section_frames
@@ -23,6 +23,7 @@ from weldseam.pipeline.section import FineSurface, SectionFit, section_frames
 # A section's seam point far from the median of this many sections around it jumps off the seam's
 # line and is dropped (trace.max_jump_m).
 CONSISTENT_WINDOW = 5
+INSIDE_FRACTION = 0.8
 
 
 @dataclass(frozen=True)
@@ -73,7 +74,9 @@ def trace_chain(
     confidence = count / len(fits)
     if confidence < params.min_valid_fraction:
         return []
-    valid = np.array([fit.kind == joint for fit in fits]) & _consistent([fit.point_m for fit in fits], params.max_jump_m)
+    positions, axes = np.array([fit.point_m for fit in fits]), np.array([fit.torch_axis for fit in fits])
+    valid = np.array([fit.kind == joint for fit in fits]) & consistent(positions, axes, params.max_offset_m,
+                                                                        params.max_turn_deg)
     seams = []
     for run, closed in _valid_runs(chain.points, valid, chain.closed, params.max_gap_m):
         run_fits = [fits[i] for i in run]
@@ -91,28 +94,38 @@ def trace_chain(
 
 
 def inside_traced(points: np.ndarray, seams: list[TracedSeam], beside_m: float) -> bool:
-    """Whether each of `points` (K, 3) lies inside the opening of one of `seams` or within
-    `beside_m` of it: within its half-opening + beside_m of one of its seam points. The crease
-    band of a groove often breaks into lines along its edges, and each traces (re-centred) to
-    the seam itself: once the seam is traced, tracing such a line again adds nothing."""
+    """Whether most (INSIDE_FRACTION) of `points` (K, 3) lie inside the opening of one of `seams`
+    or within `beside_m` of it: within its half-opening + beside_m of one of its seam points. The
+    crease band of a groove often breaks into lines along its edges, and each traces (re-centred)
+    to the seam itself: once the seam is traced, tracing such a line again adds nothing that the
+    extension of the seam's ends does not (a line along an edge traces the seam less well)."""
     covered = np.zeros(len(points), bool)
     for seam in seams:
         reach = seam.half_opening_m + beside_m
         covered |= cKDTree(seam.positions_m).query(points, distance_upper_bound=reach)[0] <= reach
-    return bool(covered.all())
+    return bool(np.mean(covered) >= INSIDE_FRACTION) if len(points) else True
 
 
-def _consistent(seam_points: list[np.ndarray], max_jump_m: float) -> np.ndarray:
-    """False for seam points farther than `max_jump_m` from the median of the
-    CONSISTENT_WINDOW sections around them."""
-    positions = np.asarray(seam_points)
-    if len(positions) < CONSISTENT_WINDOW:
-        return np.ones(len(positions), bool)
-    half = CONSISTENT_WINDOW // 2
-    padded = np.pad(positions, ((half, half), (0, 0)), mode="edge")
-    windows = np.stack([padded[k : k + len(positions)] for k in range(CONSISTENT_WINDOW)], axis=1)
-    deviation = np.linalg.norm(positions - np.median(windows, axis=1), axis=1)
-    return deviation <= max_jump_m
+def consistent(positions: np.ndarray, axes: np.ndarray, max_offset_m: float, max_turn_deg: float) -> np.ndarray:
+    """(K,) False for seam points (K, 3) that jump off the line of their neighbours: farther than
+    `max_offset_m` from the line through the CONSISTENT_WINDOW nearest other points (their mean and
+    principal direction), or whose torch axis (K, 3) is more than `max_turn_deg` from those
+    points' median axis. A point is never its own reference: at the ends the neighbours all lie on
+    one side (a section at a seam's end is often distorted by the part's end face)."""
+    count = len(positions)
+    if count <= CONSISTENT_WINDOW:
+        return np.ones(count, bool)
+    start = np.clip(np.arange(count) - CONSISTENT_WINDOW // 2, 0, count - CONSISTENT_WINDOW - 1)
+    window = start[:, None] + np.arange(CONSISTENT_WINDOW + 1)
+    others = np.array([row[row != k] for k, row in enumerate(window)])
+    neighbours = positions[others]
+    centres = neighbours.mean(axis=1)
+    direction = np.linalg.svd(neighbours - centres[:, None], full_matrices=False)[2][:, 0]
+    offset = positions - centres
+    across = offset - np.sum(offset * direction, axis=1, keepdims=True) * direction
+    reference = unit(np.median(axes[others], axis=1))
+    turn = np.degrees(np.arccos(np.clip(np.sum(axes * reference, axis=1), -1.0, 1.0)))
+    return (np.linalg.norm(across, axis=1) <= max_offset_m) & (turn <= max_turn_deg)
 
 
 def _valid_runs(centres: np.ndarray, valid: np.ndarray, closed: bool, max_gap_m: float):
