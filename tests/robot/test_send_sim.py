@@ -132,8 +132,9 @@ def test_dropped_connection_fails_without_retry_and_says_the_arc_is_unconfirmed(
     assert time.monotonic() - started < 60
 
 
-def test_a_slow_controller_still_gets_the_whole_job(robot_sim, two_seams):
-    sim = robot_sim(speedup=100.0, faults=Faults(latency_s=0.02))
+@pytest.mark.parametrize("latency_ms", [20, 200])
+def test_a_slow_controller_still_gets_the_whole_job(robot_sim, two_seams, latency_ms):
+    sim = robot_sim(speedup=100.0, faults=Faults(latency_s=latency_ms / 1000))
     result = weldseam("send", two_seams, "--host", sim.host, *SHAPING, "--yes")
     assert result.returncode == 0, result.stderr
     assert [event["event"] for event in events_of(sim, "path", "digital_output")] == [
