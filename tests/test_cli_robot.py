@@ -1,8 +1,10 @@
 from __future__ import annotations
 
+import inspect
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,6 +13,7 @@ from weldseam.io.paths import read_paths
 from weldseam.robot.moves import Shaping, motion_plan
 
 BASE = "0.45,0.1,0.05,0,0,0"
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def run(*args: str) -> subprocess.CompletedProcess:
@@ -77,11 +80,65 @@ def test_dry_run_writes_the_urscript_of_the_shaped_path(path_file, tmp_path):
     np.testing.assert_allclose(poses, plan.seams[0].weld_poses[1:], atol=1e-8)
 
 
-def test_send_to_a_bad_host_fails_with_one_line(path_file):
+def test_send_to_a_bad_host_exits_6_saying_nothing_moved(path_file):
     result = run("send", path_file, "--host", "127.0.0.254", "--robot-base", BASE, "--yes")
-    assert result.returncode == 5
-    assert result.stderr.splitlines()[-1].startswith("Error: cannot connect to 127.0.0.254:30004")
-    assert "Traceback" not in result.stderr
+    assert result.returncode == 6
+    assert result.stderr.splitlines()[-1] == (
+        "Error: cannot connect to 127.0.0.254:30004: connection refused (is the controller on, and is this its "
+        "address?); nothing moved"
+    )
+    assert "Traceback" not in result.stderr and result.stdout == ""
+
+
+def test_send_to_an_unknown_host_exits_6_naming_it(path_file):
+    result = run("send", path_file, "--host", "no-such-robot.invalid", "--robot-base", BASE, "--yes")
+    assert result.returncode == 6
+    assert result.stderr.splitlines()[-1] == (
+        "Error: cannot connect to no-such-robot.invalid: unknown host (no address for that name); nothing moved"
+    )
+
+
+def test_check_refuses_the_same_ranges_as_send(path_file):
+    result = run("check", path_file, "--robot-base", BASE, "--standoff-mm", "-10")
+    assert result.returncode == 2 and result.stdout == ""
+    assert result.stderr == (
+        "Error: --standoff-mm -10: must be 0 to 50 mm (a negative stick-out puts the torch tip inside the work)\n"
+    )
+
+
+def readme_table(heading: str) -> list[list[str]]:
+    """The rows (cells stripped, backticks removed) of the first table after `heading` in the README."""
+    text = (ROOT / "README.md").read_text()
+    section = text[text.index(heading) :]
+    rows, started = [], False
+    for line in section.splitlines()[1:]:
+        if line.startswith("|"):
+            started = True
+            cells = [cell.strip().replace("`", "") for cell in line.strip("|").split("|")]
+            if not set("".join(cells)) <= set("-: "):
+                rows.append(cells)
+        elif started:
+            break
+    return rows[1:]
+
+
+def test_the_readme_exit_code_table_lists_every_code():
+    from weldseam.commands.common import EXIT_CODES
+
+    listed = [int(row[0]) for row in readme_table("### Exit codes")]
+    assert listed == [code for code, _ in EXIT_CODES]
+
+
+def test_the_readme_states_the_range_of_every_send_option():
+    from weldseam.commands.robot import send
+    from weldseam.robot.limits import LIMITS
+
+    rows = {row[0]: row[1] for row in readme_table("#### Options of `send`")}
+    options = ["--" + name.replace("_", "-") for name in inspect.signature(send).parameters if name != "path"]
+    options = [{"--as-json": "--json"}.get(option, option) for option in options]
+    assert sorted(rows) == sorted(options)
+    for option, limit in LIMITS.items():
+        assert rows[option] == limit.text(), option
 
 
 def test_robot_sim_binds_loopback_only():
