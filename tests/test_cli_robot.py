@@ -2,6 +2,7 @@ from __future__ import annotations
 
 import inspect
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -16,13 +17,15 @@ BASE = "0.45,0.1,0.05,0,0,0"
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def run(*args: str) -> subprocess.CompletedProcess:
+def run(*args: str, env_columns: int | None = None) -> subprocess.CompletedProcess:
+    env = None if env_columns is None else {**os.environ, "COLUMNS": str(env_columns)}
     return subprocess.run(
         [sys.executable, "-m", "weldseam.cli", *args],
         check=False,
         capture_output=True,
         text=True,
         stdin=subprocess.DEVNULL,
+        env=env,
     )
 
 
@@ -104,6 +107,67 @@ def test_check_refuses_the_same_ranges_as_send(path_file):
     assert result.stderr == (
         "Error: --standoff-mm -10: must be 0 to 50 mm (a negative stick-out puts the torch tip inside the work)\n"
     )
+
+
+def test_check_table_keeps_every_header_word_whole_in_80_columns(path_file):
+    result = run("check", path_file, "--robot-base", BASE, "--standoff-mm", "12", env_columns=80)
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert max(len(line) for line in lines) <= 80
+    assert "\u2026" not in result.stdout, "no header or value cut short with an ellipsis"
+    header = " ".join(lines[1:5])
+    for word in ("seam", "poses", "reached", "max", "joint", "step", "deg", "wrist", "elbow", "shoulder", "problems"):
+        assert f" {word} " in header, word
+
+
+@pytest.mark.parametrize("command", ["check", "send"])
+def test_help_says_the_travel_angle_leans_along_the_seam(command):
+    result = run(command, "--help", env_columns=200)
+    text = " ".join(result.stdout.split())
+    assert "--travel-angle-deg FLOAT Torch lean along the seam, degrees: + push (the torch points ahead, toward " \
+           "the travel), - drag. Range: -30 to 30 deg." in text.replace("<float>", "FLOAT")  # fmt: skip
+    assert "Torch tilt about the travel direction (sideways, across the seam)" in text
+
+
+def ring_result(closed: bool):
+    """A 40 mm ring of 24 poses, torch down, around (0, 0, 0) of the scan frame."""
+    from weldseam.types import RunResult, WeldPath
+
+    angles = np.linspace(0.0, 2 * np.pi, 24, endpoint=False)
+    positions = np.column_stack([0.02 * np.cos(angles), 0.02 * np.sin(angles), np.zeros(24)])
+    travel = np.column_stack([-np.sin(angles), np.cos(angles), np.zeros(24)])
+    down = np.tile([0.0, 0.0, -1.0], (24, 1))
+    rotations = np.stack([np.cross(travel, down), travel, down], axis=2)
+    return RunResult(paths=(WeldPath(7, positions, rotations, closed=closed),))
+
+
+def test_a_csv_cannot_say_closed_so_check_warns_where_the_weld_would_stop_short(tmp_path):
+    from weldseam.io.paths import write_paths
+
+    write_paths(ring_result(closed=True), tmp_path / "ring.json")
+    write_paths(ring_result(closed=True), tmp_path / "ring.csv")
+    from_json = run("check", str(tmp_path / "ring.json"), "--robot-base", BASE, "--standoff-mm", "12")
+    from_csv = run("check", str(tmp_path / "ring.csv"), "--robot-base", BASE, "--standoff-mm", "12")
+    # (A torch turning once round the ring flips the wrist: check fails both, after reading them.)
+    assert "Warning" not in from_json.stderr
+    assert from_csv.stderr.splitlines()[0] == (
+        f"Warning: {tmp_path / 'ring.csv'}: seam 7 ends 5.2 mm from its start; a CSV cannot mark a seam closed, "
+        "so that gap stays unwelded: use the plan's .json to weld it all round"
+    )
+    setup = Shaping(base_pose=(0.45, 0.1, 0.05, 0, 0, 0), standoff_m=0.012)
+    closed = motion_plan(read_paths(tmp_path / "ring.json"), setup).seams[0].weld_poses
+    opened = motion_plan(read_paths(tmp_path / "ring.csv"), setup).seams[0].weld_poses
+    np.testing.assert_allclose(closed[-1], closed[0], atol=1e-12)
+    assert np.linalg.norm(opened[-1, :3] - opened[0, :3]) > 0.005, "what the warning says: the CSV ring stays open"
+
+
+def test_an_open_csv_seam_gets_no_warning(tmp_path, path_file):
+    from weldseam.io.paths import write_paths
+    from weldseam.types import RunResult
+
+    write_paths(RunResult(paths=tuple(read_paths(path_file))), tmp_path / "path.csv")
+    result = run("check", str(tmp_path / "path.csv"), "--robot-base", BASE, "--standoff-mm", "12")
+    assert result.returncode == 0 and result.stderr == ""
 
 
 def readme_table(heading: str) -> list[list[str]]:

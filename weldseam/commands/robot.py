@@ -36,8 +36,14 @@ SEND_EPILOG = (
     "The payload configured on the robot is left alone unless --payload-kg and --payload-cog-m are given.\n\n"
     f"Exit codes:\n\n{EXIT_TABLE}"
 )
+CLOSED_GAP_STEPS = 2.0
+TABLE_COLUMNS = ("seam", "poses", "reached", "max joint\nstep deg", "min\nwrist", "min\nelbow", "min\nshoulder m",
+                 "problems")  # fmt: skip
 
-PathArg = Annotated[str, typer.Argument(help="Path file from `weldseam plan` (.json or .csv).")]
+PathArg = Annotated[
+    str,
+    typer.Argument(help="Path file from `weldseam plan` (.json or .csv; only the JSON says which seams are closed)."),
+]
 
 
 def _ranged(text: str, option: str, of: str = "") -> str:
@@ -59,11 +65,13 @@ StandoffMm = Annotated[
 ]
 WorkAngleDeg = Annotated[
     float,
-    typer.Option(help=_ranged("Torch tilt about the travel direction, degrees.", "--work-angle-deg")),
+    typer.Option(help=_ranged("Torch tilt about the travel direction (sideways, across the seam), degrees.",
+                              "--work-angle-deg")),  # fmt: skip
 ]
 TravelAngleDeg = Annotated[
     float,
-    typer.Option(help=_ranged("Torch tilt across the seam, degrees: + push, - drag.", "--travel-angle-deg")),
+    typer.Option(help=_ranged("Torch lean along the seam, degrees: + push (the torch points ahead, toward the "
+                              "travel), - drag.", "--travel-angle-deg")),  # fmt: skip
 ]
 ToleranceMm = Annotated[float, typer.Option(help=_ranged("Decimation chord tolerance, mm.", "--tolerance-mm"))]
 AngleToleranceDeg = Annotated[
@@ -141,9 +149,21 @@ def _setup(*, robot: str, robot_base: str, tcp: str, standoff_mm: float, work_an
 
 
 def _paths(path: str):
+    """The weld paths of a path file; a CSV seam whose ends nearly meet gets a warning (CSV cannot say closed)."""
+    import numpy as np
+
     from weldseam.io.paths import read_paths
 
-    return read_paths(path)
+    paths = read_paths(path)
+    if path.lower().endswith(".csv"):
+        for seam in paths:
+            steps_m = np.linalg.norm(np.diff(seam.positions_m, axis=0), axis=1)
+            gap_m = float(np.linalg.norm(seam.positions_m[-1] - seam.positions_m[0]))
+            if len(steps_m) >= 2 and gap_m <= CLOSED_GAP_STEPS * float(np.median(steps_m)):
+                stderr(f"Warning: {path}: seam {seam.seam_id} ends {gap_m * 1000:.1f} mm from its start; a CSV "
+                       "cannot mark a seam closed, so that gap stays unwelded: use the plan's .json to weld it all "
+                       "round")  # fmt: skip
+    return paths
 
 
 def _checked(plan, robot: str):
@@ -165,17 +185,9 @@ def _table(plan, report):
     from rich.table import Table
 
     table = Table(title=f"{report.robot}: {len(report.rows)} poses, {len(report.failures)} failing")
-    for column in (
-        "seam",
-        "poses",
-        "reachable",
-        "max joint step deg",
-        "min wrist",
-        "min elbow",
-        "min shoulder m",
-        "problems",
-    ):
-        table.add_column(column)
+    # Two-line headers keep the whole table, every header word intact, within an 80-column terminal.
+    for column in TABLE_COLUMNS:
+        table.add_column(column, no_wrap=True)
     for seam in plan.seams:
         rows = [row for row in report.rows if row.seam_id == seam.seam_id]
         steps = [row.joint_step_rad for row in rows if row.joint_step_rad is not None and row.kind != "approach"]
