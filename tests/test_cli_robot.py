@@ -17,7 +17,7 @@ BASE = "0.45,0.1,0.05,0,0,0"
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def run(*args: str, env_columns: int | None = None) -> subprocess.CompletedProcess:
+def run(*args: str, env_columns: int | None = None, cwd=None) -> subprocess.CompletedProcess:
     env = None if env_columns is None else {**os.environ, "COLUMNS": str(env_columns)}
     return subprocess.run(
         [sys.executable, "-m", "weldseam.cli", *args],
@@ -26,6 +26,7 @@ def run(*args: str, env_columns: int | None = None) -> subprocess.CompletedProce
         text=True,
         stdin=subprocess.DEVNULL,
         env=env,
+        cwd=cwd,
     )
 
 
@@ -99,6 +100,22 @@ def test_send_to_an_unknown_host_exits_6_naming_it(path_file):
     assert result.stderr.splitlines()[-1] == (
         "Error: cannot connect to no-such-robot.invalid: unknown host (no address for that name); nothing moved"
     )
+
+
+@pytest.mark.parametrize(
+    "options, message",
+    [  # fmt: skip
+        (["--host", "127.0.0.254", "--script", "weld.script"],
+         "Error: --script needs --dry-run (a real run writes no script); nothing was sent"),
+        (["--dry-run", "--log", "tcp.csv"],
+         "Error: --log needs a real run (a dry run reads no TCP back); nothing was sent"),
+    ],
+    ids=["script-without-dry-run", "log-with-dry-run"],
+)
+def test_send_refuses_an_output_it_would_not_write(path_file, tmp_path, options, message):
+    result = run("send", path_file, "--robot-base", BASE, "--yes", *options, cwd=tmp_path)
+    assert (result.returncode, result.stderr, result.stdout) == (2, message + "\n", "")
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_check_refuses_the_same_ranges_as_send(path_file):

@@ -152,10 +152,15 @@ def test_an_option_outside_its_range_is_refused_before_anything_reaches_the_cont
 
 # Faults run at 10x real time: a waypoint then lasts ~50 ms, well over the client's 8 ms poll, so the
 # waypoint it names is exact (at 100x several pass between two polls).
-def test_protective_stop_stops_switches_the_arc_off_and_names_the_waypoint(robot_sim, two_seams):
+def test_protective_stop_stops_switches_the_arc_off_and_names_the_waypoint(robot_sim, two_seams, tmp_path):
     sim = robot_sim(speedup=10.0, faults=Faults(protective_stop_at=6))
-    result = weldseam("send", two_seams, "--host", sim.host, *SHAPING, "--yes")
+    log = tmp_path / "tcp.jsonl"
+    result = weldseam("send", two_seams, "--host", sim.host, *SHAPING, "--yes", "--log", str(log))
     assert result.returncode == 5
+    logged = [json.loads(line) for line in log.read_text().splitlines()]
+    assert {row["seam_id"] for row in logged} == {0}, "the poses read back before the stop are kept"
+    assert [row["waypoint"] for row in logged] == sorted({row["waypoint"] for row in logged})
+    assert 0 < logged[-1]["waypoint"] <= 6
     summary, message = result.stderr.splitlines()  # ur-rtde's own lines stay out of the terminal
     assert "seam 0, waypoint 6 of" in message and "protective stop" in message and "arc off" in message, message
     assert result.stdout == ""
