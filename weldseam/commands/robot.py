@@ -347,31 +347,33 @@ def _run(plan, host: str, log) -> None:
         log.record(plan.seams[seam_index].seam_id, waypoint, pose)
 
     client = UrClient(host)
-    with Progress(disable=not sys.stderr.isatty(), console=Console(stderr=True)) as progress:
-        tasks = [progress.add_task(f"seam {s.seam_id}", total=len(s.weld_poses)) for s in plan.seams]
-        try:
-            with sigterm_as_interrupt(), native_output_silenced():
-                try:
-                    _connect(client)
-                    execute(
-                        plan,
-                        client,
-                        on_progress=lambda seam, waypoint: progress.update(tasks[seam], completed=waypoint + 1),
-                        on_pose=record if log is not None else None,
-                    )
-                except RobotFault as fault:
-                    if client.connection_lost:
-                        _leave_after_lost_connection(fault, log)
-                    raise
-                finally:
-                    client.close()
-        except KeyboardInterrupt as interrupt:
-            _keep(log)
-            stderr(f"Error: interrupted {interrupt}".rstrip())  # "at seam S, waypoint W of K: arm stopped, arc off"
-            raise typer.Exit(130) from None
-        except WeldseamError:
-            _keep(log)
-            raise
+    try:
+        with sigterm_as_interrupt(), native_output_silenced():
+            try:
+                # Inside the silencing, so the progress display ends on its own line before any last word.
+                with Progress(disable=not sys.stderr.isatty(), console=Console(stderr=True)) as progress:
+                    tasks = [progress.add_task(f"seam {s.seam_id}", total=len(s.weld_poses)) for s in plan.seams]
+                    try:
+                        _connect(client)
+                        execute(
+                            plan,
+                            client,
+                            on_progress=lambda seam, waypoint: progress.update(tasks[seam], completed=waypoint + 1),
+                            on_pose=record if log is not None else None,
+                        )
+                    finally:
+                        client.close()
+            except RobotFault as fault:
+                if client.connection_lost:
+                    _leave_after_lost_connection(fault, log)
+                raise
+    except KeyboardInterrupt as interrupt:
+        _keep(log)
+        stderr(f"Error: interrupted {interrupt}".rstrip())  # "at seam S, waypoint W of K: arm stopped, arc off"
+        raise typer.Exit(130) from None
+    except WeldseamError:
+        _keep(log)
+        raise
     if log is not None:
         log.save()
 
