@@ -1,8 +1,11 @@
 from __future__ import annotations
 
+import inspect
 import json
+import os
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,15 +14,19 @@ from weldseam.io.paths import read_paths
 from weldseam.robot.moves import Shaping, motion_plan
 
 BASE = "0.45,0.1,0.05,0,0,0"
+ROOT = Path(__file__).resolve().parents[1]
 
 
-def run(*args: str) -> subprocess.CompletedProcess:
+def run(*args: str, env_columns: int | None = None, cwd=None) -> subprocess.CompletedProcess:
+    env = None if env_columns is None else {**os.environ, "COLUMNS": str(env_columns)}
     return subprocess.run(
         [sys.executable, "-m", "weldseam.cli", *args],
         check=False,
         capture_output=True,
         text=True,
         stdin=subprocess.DEVNULL,
+        env=env,
+        cwd=cwd,
     )
 
 
@@ -77,11 +84,142 @@ def test_dry_run_writes_the_urscript_of_the_shaped_path(path_file, tmp_path):
     np.testing.assert_allclose(poses, plan.seams[0].weld_poses[1:], atol=1e-8)
 
 
-def test_send_to_a_bad_host_fails_with_one_line(path_file):
+def test_send_to_a_bad_host_exits_6_saying_nothing_moved(path_file):
     result = run("send", path_file, "--host", "127.0.0.254", "--robot-base", BASE, "--yes")
-    assert result.returncode == 5
-    assert result.stderr.splitlines()[-1].startswith("Error: cannot connect to 127.0.0.254:30004")
-    assert "Traceback" not in result.stderr
+    assert result.returncode == 6
+    assert result.stderr.splitlines()[-1] == (
+        "Error: cannot connect to 127.0.0.254:30004: connection refused (is the controller on, and is this its "
+        "address?); nothing moved"
+    )
+    assert "Traceback" not in result.stderr and result.stdout == ""
+
+
+def test_send_to_an_unknown_host_exits_6_naming_it(path_file):
+    result = run("send", path_file, "--host", "no-such-robot.invalid", "--robot-base", BASE, "--yes")
+    assert result.returncode == 6
+    assert result.stderr.splitlines()[-1] == (
+        "Error: cannot connect to no-such-robot.invalid: unknown host (no address for that name); nothing moved"
+    )
+
+
+@pytest.mark.parametrize(
+    "options, message",
+    [  # fmt: skip
+        (["--host", "127.0.0.254", "--script", "weld.script"],
+         "Error: --script needs --dry-run (a real run writes no script); nothing was sent"),
+        (["--dry-run", "--log", "tcp.csv"],
+         "Error: --log needs a real run (a dry run reads no TCP back); nothing was sent"),
+    ],
+    ids=["script-without-dry-run", "log-with-dry-run"],
+)
+def test_send_refuses_an_output_it_would_not_write(path_file, tmp_path, options, message):
+    result = run("send", path_file, "--robot-base", BASE, "--yes", *options, cwd=tmp_path)
+    assert (result.returncode, result.stderr, result.stdout) == (2, message + "\n", "")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_check_refuses_the_same_ranges_as_send(path_file):
+    result = run("check", path_file, "--robot-base", BASE, "--standoff-mm", "-10")
+    assert result.returncode == 2 and result.stdout == ""
+    assert result.stderr == (
+        "Error: --standoff-mm -10: must be 0 to 50 mm (a negative stick-out puts the torch tip inside the work)\n"
+    )
+
+
+def test_check_table_keeps_every_header_word_whole_in_80_columns(path_file):
+    result = run("check", path_file, "--robot-base", BASE, "--standoff-mm", "12", env_columns=80)
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert max(len(line) for line in lines) <= 80
+    assert "\u2026" not in result.stdout, "no header or value cut short with an ellipsis"
+    header = " ".join(lines[1:5])
+    for word in ("seam", "poses", "reached", "max", "joint", "step", "deg", "wrist", "elbow", "shoulder", "problems"):
+        assert f" {word} " in header, word
+
+
+@pytest.mark.parametrize("command", ["check", "send"])
+def test_help_says_the_travel_angle_leans_along_the_seam(command):
+    result = run(command, "--help", env_columns=200)
+    text = " ".join(result.stdout.split())
+    assert "--travel-angle-deg FLOAT Torch lean along the seam, degrees: + push (the torch points ahead, toward " \
+           "the travel), - drag. Range: -30 to 30 deg." in text.replace("<float>", "FLOAT")  # fmt: skip
+    assert "Torch tilt about the travel direction (sideways, across the seam)" in text
+
+
+def ring_result(closed: bool):
+    """A 40 mm ring of 24 poses, torch down, around (0, 0, 0) of the scan frame."""
+    from weldseam.types import RunResult, WeldPath
+
+    angles = np.linspace(0.0, 2 * np.pi, 24, endpoint=False)
+    positions = np.column_stack([0.02 * np.cos(angles), 0.02 * np.sin(angles), np.zeros(24)])
+    travel = np.column_stack([-np.sin(angles), np.cos(angles), np.zeros(24)])
+    down = np.tile([0.0, 0.0, -1.0], (24, 1))
+    rotations = np.stack([np.cross(travel, down), travel, down], axis=2)
+    return RunResult(paths=(WeldPath(7, positions, rotations, closed=closed),))
+
+
+def test_a_csv_cannot_say_closed_so_check_warns_where_the_weld_would_stop_short(tmp_path):
+    from weldseam.io.paths import write_paths
+
+    write_paths(ring_result(closed=True), tmp_path / "ring.json")
+    write_paths(ring_result(closed=True), tmp_path / "ring.csv")
+    from_json = run("check", str(tmp_path / "ring.json"), "--robot-base", BASE, "--standoff-mm", "12")
+    from_csv = run("check", str(tmp_path / "ring.csv"), "--robot-base", BASE, "--standoff-mm", "12")
+    # (A torch turning once round the ring flips the wrist: check fails both, after reading them.)
+    assert "Warning" not in from_json.stderr
+    assert from_csv.stderr.splitlines()[0] == (
+        f"Warning: {tmp_path / 'ring.csv'}: seam 7 ends 5.2 mm from its start; a CSV cannot mark a seam closed, "
+        "so that gap stays unwelded: use the plan's .json to weld it all round"
+    )
+    setup = Shaping(base_pose=(0.45, 0.1, 0.05, 0, 0, 0), standoff_m=0.012)
+    closed = motion_plan(read_paths(tmp_path / "ring.json"), setup).seams[0].weld_poses
+    opened = motion_plan(read_paths(tmp_path / "ring.csv"), setup).seams[0].weld_poses
+    np.testing.assert_allclose(closed[-1], closed[0], atol=1e-12)
+    assert np.linalg.norm(opened[-1, :3] - opened[0, :3]) > 0.005, "what the warning says: the CSV ring stays open"
+
+
+def test_an_open_csv_seam_gets_no_warning(tmp_path, path_file):
+    from weldseam.io.paths import write_paths
+    from weldseam.types import RunResult
+
+    write_paths(RunResult(paths=tuple(read_paths(path_file))), tmp_path / "path.csv")
+    result = run("check", str(tmp_path / "path.csv"), "--robot-base", BASE, "--standoff-mm", "12")
+    assert result.returncode == 0 and result.stderr == ""
+
+
+def readme_table(heading: str) -> list[list[str]]:
+    """The rows (cells stripped, backticks removed) of the first table after `heading` in the README."""
+    text = (ROOT / "README.md").read_text()
+    section = text[text.index(heading) :]
+    rows, started = [], False
+    for line in section.splitlines()[1:]:
+        if line.startswith("|"):
+            started = True
+            cells = [cell.strip().replace("`", "") for cell in line.strip("|").split("|")]
+            if not set("".join(cells)) <= set("-: "):
+                rows.append(cells)
+        elif started:
+            break
+    return rows[1:]
+
+
+def test_the_readme_exit_code_table_lists_every_code():
+    from weldseam.commands.common import EXIT_CODES
+
+    listed = [int(row[0]) for row in readme_table("### Exit codes")]
+    assert listed == [code for code, _ in EXIT_CODES]
+
+
+def test_the_readme_states_the_range_of_every_send_option():
+    from weldseam.commands.robot import send
+    from weldseam.robot.limits import LIMITS
+
+    rows = {row[0]: row[1] for row in readme_table("#### Options of `send`")}
+    options = ["--" + name.replace("_", "-") for name in inspect.signature(send).parameters if name != "path"]
+    options = [{"--as-json": "--json"}.get(option, option) for option in options]
+    assert sorted(rows) == sorted(options)
+    for option, limit in LIMITS.items():
+        assert rows[option] == limit.text(), option
 
 
 def test_robot_sim_binds_loopback_only():

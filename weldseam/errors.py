@@ -32,3 +32,7 @@ class UnreachableError(WeldseamError):
 
 class RobotFault(WeldseamError):
     """The controller reported a fault or the connection broke (the robot is stopped)."""
+
+
+class RobotConnectionError(WeldseamError):
+    """The robot controller could not be reached or would not start a session (nothing moved)."""

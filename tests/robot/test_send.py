@@ -6,7 +6,7 @@ import signal
 import numpy as np
 import pytest
 
-from weldseam.errors import RobotFault
+from weldseam.errors import InputError, RobotFault, StageError
 from weldseam.robot.moves import Shaping, motion_plan
 from weldseam.robot.send import execute, path_entries, sigterm_as_interrupt
 from weldseam.types import WeldPath
@@ -30,8 +30,8 @@ class FakeClient:
     def set_tcp(self, pose):
         self.calls.append(("tcp", tuple(pose)))
 
-    def set_payload(self, kg):
-        self.calls.append(("payload", kg))
+    def set_payload(self, kg, cog_m):
+        self.calls.append(("payload", kg, tuple(cog_m)))
 
     def move_linear(self, pose, speed_m_s, acceleration_m_s2):
         self.calls.append(("movel", tuple(pose), speed_m_s))
@@ -61,7 +61,8 @@ def test_sequence_and_arc_around_each_weld():
     progress = []
     execute(PLAN, client, on_progress=lambda seam, index: progress.append((seam, index)))
     kinds = [call[0] for call in client.calls]
-    assert kinds == ["tcp", "payload"] + ["movel", "movel", "do", "path", "do", "movel"] * 2
+    assert kinds == ["tcp", "do"] + ["movel", "movel", "do", "path", "do", "movel"] * 2, "the robot's payload untouched"
+    assert client.calls[1] == ("do", 4, False), "the arc output is off before the first move"
     for seam_number, seam in enumerate(PLAN.seams):
         base = 2 + 6 * seam_number
         approach, first, on, path, off, retreat = client.calls[base : base + 6]
@@ -110,3 +111,79 @@ def test_sigterm_becomes_keyboard_interrupt_only_inside():
     with pytest.raises(KeyboardInterrupt), sigterm_as_interrupt():
         os.kill(os.getpid(), signal.SIGTERM)
     assert signal.getsignal(signal.SIGTERM) is previous
+
+
+def test_a_payload_is_set_only_when_given_and_with_its_centre_of_gravity():
+    client = FakeClient()
+    setup = Shaping(base_pose=(0.4, 0, 0.1, 0, 0, 0), payload_kg=1.5, payload_cog_m=(0.0, 0.0, 0.07))
+    execute(motion_plan([arc(0)], setup), client)
+    assert client.calls[1] == ("payload", 1.5, (0.0, 0.0, 0.07))
+
+
+@pytest.mark.parametrize("arc_output", [99, -1, 8])
+def test_an_arc_output_that_is_no_standard_output_is_refused_before_any_call(arc_output):
+    client = FakeClient()
+    plan = motion_plan([arc(0)], Shaping(base_pose=(0.4, 0, 0.1, 0, 0, 0), arc_output=arc_output))
+    with pytest.raises(InputError, match=rf"arc output {arc_output}: not a standard digital output \(0 to 7\)"):
+        execute(plan, client)
+    assert client.calls == []
+
+
+def test_half_a_payload_is_refused_before_any_call():
+    client = FakeClient()
+    with pytest.raises(InputError, match="centre of gravity"):
+        execute(motion_plan([arc(0)], Shaping(base_pose=(0.4, 0, 0.1, 0, 0, 0), payload_kg=1.0)), client)
+    assert client.calls == []
+
+
+class BuggyClient(FakeClient):
+    """An exception no one expected (a bug, here or in ur-rtde) in the middle of the first weld."""
+
+    def move_path(self, entries, on_progress):
+        self.calls.append(("path", np.array(entries)))
+        on_progress(0)
+        on_progress(1)
+        raise IndexError("bitset::test: __position (which is 99) >= _Nb (which is 64)")
+
+
+def test_an_unexpected_exception_stops_the_arm_switches_the_arc_off_and_says_where():
+    client = BuggyClient()
+    expected = r"^send: seam 0, waypoint 1 of \d+: unexpected IndexError: .*\(arm stopped, arc off"
+    with pytest.raises(StageError, match=expected):
+        execute(PLAN, client)
+    assert client.calls[-2:] == [("stop",), ("do", 4, False)]
+
+
+def test_a_failing_progress_callback_stops_the_arm_and_switches_the_arc_off():
+    def broken(seam, waypoint):
+        raise ValueError("progress display broke")
+
+    client = FakeClient()
+    expected = r"^send: seam 0, waypoint 0 of \d+: unexpected ValueError: progress display broke \(arm stopped, arc off"
+    with pytest.raises(StageError, match=expected):
+        execute(PLAN, client, on_progress=broken)
+    assert client.calls[-2:] == [("stop",), ("do", 4, False)]
+
+
+def test_an_interrupt_says_which_seam_and_waypoint_and_that_the_arc_is_off():
+    client = FakeClient(fail_at=5, failure=KeyboardInterrupt)
+    with pytest.raises(KeyboardInterrupt) as interrupt:
+        execute(PLAN, client)
+    count = len(PLAN.seams[0].weld_poses)
+    assert str(interrupt.value) == f"at seam 0, waypoint 4 of {count}: arm stopped, arc off"
+
+
+class ImpatientOperatorClient(FakeClient):
+    """Ctrl-C again while the arm is being stopped after the first one."""
+
+    def stop(self):
+        os.kill(os.getpid(), signal.SIGINT)
+        super().stop()
+
+
+def test_a_second_ctrl_c_during_the_stop_cannot_leave_the_arc_on():
+    client = ImpatientOperatorClient(fail_at=2, failure=KeyboardInterrupt)
+    with pytest.raises(KeyboardInterrupt, match="arm stopped, arc off"):
+        execute(PLAN, client)
+    assert client.calls[-2:] == [("stop",), ("do", 4, False)]
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler

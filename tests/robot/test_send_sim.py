@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import signal
 import subprocess
 import sys
@@ -53,6 +54,14 @@ def expected_plan(path: str):
     return motion_plan(read_paths(path), setup)
 
 
+def distance_to_polyline(points: np.ndarray, polyline: np.ndarray) -> np.ndarray:
+    """(N,) distance of each point (N, 3) from the poly-line (K, 3), m."""
+    starts, ends = polyline[:-1], polyline[1:]
+    along = np.clip(np.einsum("ksd,sd->ks", points[:, None] - starts, ends - starts)
+                    / np.einsum("sd,sd->s", ends - starts, ends - starts), 0, 1)  # fmt: skip
+    return np.linalg.norm(points[:, None] - (starts + along[..., None] * (ends - starts)), axis=2).min(axis=1)
+
+
 def assert_same_pose(received, planned, what: str) -> None:
     received, planned = np.asarray(received, dtype=float), np.asarray(planned, dtype=float)
     assert np.linalg.norm(received[:3] - planned[:3]) <= POSITION_TOLERANCE_M, what
@@ -71,11 +80,11 @@ def test_send_delivers_the_planned_motion_with_the_arc_on_exactly_around_each_we
     assert result.returncode == 0, result.stderr
     plan = expected_plan(two_seams)
     kinds = [event["event"] for event in sim.events]
-    assert kinds == ["set_tcp", "set_payload"] + [
+    assert kinds == ["set_tcp"] + [  # and no set_payload: the robot's own payload setting stays
         "movel", "movel", "digital_output", "path", "digital_output", "movel"] * 2  # fmt: skip
     assert sim.events[0]["pose"] == pytest.approx(plan.tcp_pose.tolist(), abs=1e-12)
     for number, seam in enumerate(plan.seams):
-        approach, first, on, path, off, retreat = sim.events[2 + 6 * number : 8 + 6 * number]
+        approach, first, on, path, off, retreat = sim.events[1 + 6 * number : 7 + 6 * number]
         assert approach["pose"] == pytest.approx(seam.approach_pose.tolist(), abs=1e-12)
         assert first["pose"] == pytest.approx(seam.weld_poses[0].tolist(), abs=1e-12)
         assert retreat["pose"] == pytest.approx(seam.retreat_pose.tolist(), abs=1e-12)
@@ -97,23 +106,64 @@ def test_send_delivers_the_planned_motion_with_the_arc_on_exactly_around_each_we
     rows = np.loadtxt(log, delimiter=",", skiprows=1)
     assert len(rows) >= 4 and set(rows[:, 0]) == {0, 1}
     for seam_id, seam in enumerate(plan.seams):
-        points = rows[rows[:, 0] == seam_id, 2:5]
-        polyline = seam.weld_poses[:, :3]
-        starts, ends = polyline[:-1], polyline[1:]
-        along = np.clip(np.einsum("ksd,sd->ks", points[:, None] - starts, ends - starts)
-                        / np.einsum("sd,sd->s", ends - starts, ends - starts), 0, 1)  # fmt: skip
-        distance = np.linalg.norm(points[:, None] - (starts + along[..., None] * (ends - starts)), axis=2).min(axis=1)
+        distance = distance_to_polyline(rows[rows[:, 0] == seam_id, 2:5], seam.weld_poses[:, :3])
         assert distance.max() < 1e-5, "the logged actual TCP lies on the weld path"
+
+
+def test_the_payload_configured_on_the_robot_is_left_alone_unless_given(robot_sim, two_seams):
+    sim = robot_sim(speedup=100.0)
+    given = ["--payload-kg", "1.2", "--payload-cog-m", "0,0.01,0.08"]
+    result = weldseam("send", two_seams, "--host", sim.host, *SHAPING, *given, "--yes")
+    assert result.returncode == 0, result.stderr
+    assert [event["event"] for event in sim.events[:3]] == ["set_tcp", "set_payload", "movel"]
+    assert [(event["mass_kg"], event["cog_m"]) for event in events_of(sim, "set_payload")] == [(1.2, [0.0, 0.01, 0.08])]
+
+
+OUT_OF_RANGE = [
+    (["--arc-do", "99"], "--arc-do 99: must be 0 to 7 (the standard digital outputs of the control box)"),
+    (["--arc-do", "-1"], "--arc-do -1: must be 0 to 7 (the standard digital outputs of the control box)"),
+    (["--standoff-mm", "-10"],
+     "--standoff-mm -10: must be 0 to 50 mm (a negative stick-out puts the torch tip inside the work)"),
+    (["--blend-mm", "-1"], "--blend-mm -1: must be 0 to 10 mm (a blend cuts the corner it rounds)"),
+    (["--speed-mm-s", "5000"],
+     "--speed-mm-s 5000: must be over 0 up to 100 mm/s (arc welding travels 2-25 mm/s, laser up to ~100)"),
+    (["--speed-mm-s", "nan"],
+     "--speed-mm-s nan: must be over 0 up to 100 mm/s (arc welding travels 2-25 mm/s, laser up to ~100)"),
+    (["--payload-kg", "100", "--payload-cog-m", "0,0,0.1"],
+     "--payload-kg 100: must be over 0 up to 10 kg (and at most the arm's rated payload: UR5/UR5e 5 kg, UR10 10 kg)"),
+    (["--payload-kg", "7", "--payload-cog-m", "0,0,0.1"], "--payload-kg 7: over the ur5's rated payload of 5 kg"),
+    (["--payload-kg", "1"], "--payload-kg and --payload-cog-m go together: a payload needs its mass and its centre "
+                            "of gravity (leave both out to keep the payload configured on the robot)"),
+    (["--log", "/nonexistent/tcp.csv"],
+     "/nonexistent/tcp.csv: cannot write (No such file or directory); nothing was sent"),
+    (["--log", "tcp.txt"], "tcp.txt: unknown log format '.txt' (use .csv or .jsonl); nothing was sent"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("options, message", OUT_OF_RANGE, ids=[" ".join(options) for options, _ in OUT_OF_RANGE])
+def test_an_option_outside_its_range_is_refused_before_anything_reaches_the_controller(
+    robot_sim, two_seams, tmp_path, options, message
+):
+    sim = robot_sim(speedup=100.0)
+    result = weldseam("send", two_seams, "--host", sim.host, *SHAPING, *options, "--yes", cwd=tmp_path)
+    assert (result.returncode, result.stderr.splitlines(), result.stdout) == (2, [f"Error: {message}"], "")
+    assert sim.events == [] and list(tmp_path.iterdir()) == []
 
 
 # Faults run at 10x real time: a waypoint then lasts ~50 ms, well over the client's 8 ms poll, so the
 # waypoint it names is exact (at 100x several pass between two polls).
-def test_protective_stop_stops_switches_the_arc_off_and_names_the_waypoint(robot_sim, two_seams):
+def test_protective_stop_stops_switches_the_arc_off_and_names_the_waypoint(robot_sim, two_seams, tmp_path):
     sim = robot_sim(speedup=10.0, faults=Faults(protective_stop_at=6))
-    result = weldseam("send", two_seams, "--host", sim.host, *SHAPING, "--yes")
+    log = tmp_path / "tcp.jsonl"
+    result = weldseam("send", two_seams, "--host", sim.host, *SHAPING, "--yes", "--log", str(log))
     assert result.returncode == 5
-    message = result.stderr.strip().splitlines()[-1]
+    logged = [json.loads(line) for line in log.read_text().splitlines()]
+    assert {row["seam_id"] for row in logged} == {0}, "the poses read back before the stop are kept"
+    assert [row["waypoint"] for row in logged] == sorted({row["waypoint"] for row in logged})
+    assert 0 < logged[-1]["waypoint"] <= 6
+    summary, message = result.stderr.splitlines()  # ur-rtde's own lines stay out of the terminal
     assert "seam 0, waypoint 6 of" in message and "protective stop" in message and "arc off" in message, message
+    assert result.stdout == ""
     kinds = [event["event"] for event in sim.events]
     after = kinds[kinds.index("protective_stop") + 1 :]
     assert after == ["digital_output"] and sim.events[-1]["on"] is False, "arc off, and nothing moved again"
@@ -126,29 +176,33 @@ def test_dropped_connection_fails_without_retry_and_says_the_arc_is_unconfirmed(
     started = time.monotonic()
     result = weldseam("send", two_seams, "--host", sim.host, *SHAPING, "--yes")
     assert result.returncode == 5
-    message = result.stderr.strip().splitlines()[-1]
+    # ur-rtde prints "Reconnecting..." and its exceptions itself; only our one line reaches the user.
+    summary, message = result.stderr.splitlines()
+    assert summary.startswith("2 seam(s), ") and result.stdout == ""
     assert "seam 0, waypoint 6 of" in message and "lost" in message and "NOT CONFIRMED OFF" in message, message
     assert [event["event"] for event in sim.events][-1] == "disconnect"
     assert time.monotonic() - started < 60
 
 
-def test_a_slow_controller_still_gets_the_whole_job(robot_sim, two_seams):
-    sim = robot_sim(speedup=100.0, faults=Faults(latency_s=0.02))
+@pytest.mark.parametrize("latency_ms", [20, 200])
+def test_a_slow_controller_still_gets_the_whole_job(robot_sim, two_seams, latency_ms):
+    sim = robot_sim(speedup=100.0, faults=Faults(latency_s=latency_ms / 1000))
     result = weldseam("send", two_seams, "--host", sim.host, *SHAPING, "--yes")
     assert result.returncode == 0, result.stderr
-    assert [event["event"] for event in events_of(sim, "path", "digital_output")] == [
-        "digital_output", "path", "digital_output"] * 2  # fmt: skip
+    assert [event["event"] for event in sim.events] == ["set_tcp"] + [
+        "movel", "movel", "digital_output", "path", "digital_output", "movel"] * 2  # fmt: skip
 
 
-def test_sigterm_mid_weld_stops_the_arm_then_switches_the_arc_off(robot_sim, two_seams):
+@pytest.mark.parametrize("signal_number", [signal.SIGINT, signal.SIGTERM], ids=["ctrl-c", "sigterm"])
+def test_an_interrupt_mid_weld_stops_the_arm_switches_the_arc_off_and_says_where(robot_sim, two_seams, signal_number):
     sim = robot_sim(speedup=1.0)
     command = [sys.executable, "-m", "weldseam.cli", "send", two_seams, "--host", sim.host, *SHAPING, "--yes"]
     process = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                text=True)  # fmt: skip
     try:
         assert sim.wait_for("path", timeout_s=60) is not None
-        time.sleep(0.3)
-        process.send_signal(signal.SIGTERM)
+        time.sleep(1.5)
+        process.send_signal(signal_number)
         _, stderr = process.communicate(timeout=30)
     finally:
         process.kill()
@@ -158,6 +212,35 @@ def test_sigterm_mid_weld_stops_the_arm_then_switches_the_arc_off(robot_sim, two
     assert sim.events[-1]["on"] is False
     stopped_at = np.array(sim.events[-2]["tcp_pose"])
     assert_same_pose(sim.events[-1]["tcp_pose"], stopped_at, "the arm stays where it stopped")
+    message = stderr.splitlines()[-1]
+    said = re.fullmatch(r"Error: interrupted at seam 0, waypoint (\d+) of (\d+): arm stopped, arc off", message)
+    assert said, message
+    entries = np.array(events_of(sim, "path")[0]["entries"])
+    waypoint, count = int(said.group(1)), int(said.group(2))
+    assert count == len(entries) and 0 < waypoint < count
+    # The arm was heading for the waypoint named (or had just passed it): it stopped on the path next to it.
+    near = entries[max(waypoint - 1, 0) : waypoint + 2, :3]
+    assert distance_to_polyline(stopped_at[None, :3], near)[0] < 1e-4
+
+
+def test_a_send_after_one_killed_mid_weld_takes_over_the_controller_with_the_arc_off_first(robot_sim, two_seams):
+    """A killed send leaves ur-rtde's script running and the arc output on; the next one stops the script (through
+    the dashboard), starts its own and switches the arc off before it moves."""
+    sim = robot_sim(speedup=1.0)
+    command = [sys.executable, "-m", "weldseam.cli", "send", two_seams, "--host", sim.host, *SHAPING, "--yes"]
+    killed = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        assert sim.wait_for("path", timeout_s=60) is not None
+    finally:
+        killed.kill()
+        killed.wait(timeout=30)
+    assert sim.controller.program_running and sim.controller.digital_outputs == 0b10, "script running, arc on"
+    result = weldseam("send", two_seams, "--host", sim.host, *SHAPING, "--speed-mm-s", "50", "--yes")
+    assert result.returncode == 0, result.stderr
+    events = sim.events[[event["event"] for event in sim.events].index("set_tcp", 1) :]
+    assert [event["event"] for event in events] == ["set_tcp", "digital_output"] + [
+        "movel", "movel", "digital_output", "path", "digital_output", "movel"] * 2  # fmt: skip
+    assert (events[1]["index"], events[1]["on"], events[1]["moving"]) == (1, False, False)
 
 
 def test_refusals_reach_no_controller(robot_sim, two_seams):

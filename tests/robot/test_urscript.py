@@ -38,3 +38,10 @@ def test_script_has_one_movel_per_waypoint_with_blends_and_arc_around_weld():
 def test_no_arc_output_means_no_digital_out():
     plan = motion_plan([arc(0)], Shaping(base_pose=(0.4, 0, 0.1, 0, 0, 0)))
     assert "set_standard_digital_out" not in urscript(plan)
+
+
+def test_the_payload_is_left_alone_unless_given_and_then_comes_with_its_centre_of_gravity():
+    untouched = urscript(motion_plan([arc(0)], Shaping(base_pose=(0.4, 0, 0.1, 0, 0, 0))))
+    assert "set_payload" not in untouched
+    given = Shaping(base_pose=(0.4, 0, 0.1, 0, 0, 0), payload_kg=1.25, payload_cog_m=(0.0, 0.01, 0.08))
+    assert "  set_payload(1.25, [0, 0.01, 0.08])" in urscript(motion_plan([arc(0)], given)).splitlines()

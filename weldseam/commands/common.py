@@ -11,6 +11,7 @@ import typer
 from weldseam.errors import (
     InputError,
     NoSeamError,
+    RobotConnectionError,
     RobotFault,
     StageError,
     UnreachableError,
@@ -24,6 +25,7 @@ EXIT_CODES = (
     (3, "no weld seam found"),
     (4, "a pose is unreachable (refused before any motion)"),
     (5, "robot fault (the robot was stopped)"),
+    (6, "could not connect to the robot (nothing moved)"),
     (70, "internal error (a bug: please report it with the input)"),
     (130, "interrupted (Ctrl-C)"),
 )
@@ -33,6 +35,7 @@ EXIT_FOR = (
     (NoSeamError, 3),
     (UnreachableError, 4),
     (RobotFault, EXIT_ROBOT_FAULT),
+    (RobotConnectionError, 6),
     (StageError, 70),
 )
 EXIT_TABLE = "\n\n".join(f"{code}: {meaning}" for code, meaning in EXIT_CODES)

@@ -15,10 +15,10 @@ EPILOG = (
     "  weldseam robot-sim --host 127.0.0.2 --log sim.json --speedup 20\n\n"
     "  weldseam send path.json --host 127.0.0.2 --yes\n\n"
     "Faults: --protective-stop-at K and --disconnect-at K fire on reaching waypoint K, counted from 0 over "
-    "every moveL path received; --latency-ms delays every packet (a slow controller).\n\n"
+    "every moveL path received; --latency-ms delays every packet from a client (a slow network).\n\n"
     "The log (JSON) lists every event that would reach a robot: set_tcp, set_payload, movel, path (entries "
     "of pose, speed, acceleration, blend), digital_output (with the TCP pose at that moment), stopl, "
-    "inverse_kinematics, protective_stop, disconnect, fault.\n\n"
+    "inverse_kinematics, protective_stop, disconnect, fault, program_stopped (a dashboard stop).\n\n"
     f"Exit codes:\n\n{EXIT_TABLE}"
 )
 
@@ -35,7 +35,9 @@ def robot_sim(
         Optional[int], typer.Option(help="Protective stop on reaching this path waypoint.")
     ] = None,
     disconnect_at: Annotated[Optional[int], typer.Option(help="Drop every connection at this path waypoint.")] = None,
-    latency_ms: Annotated[float, typer.Option(help="Handle every client packet this late (ms).")] = 0.0,
+    latency_ms: Annotated[
+        float, typer.Option(help="Handle every client packet this long after it arrived (ms): a slow network.")
+    ] = 0.0,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No event lines on stderr.")] = False,
 ) -> None:
     """Serve a fake UR controller (RTDE, script, dashboard) on a loopback address, for tests and rehearsals."""

@@ -13,7 +13,8 @@ from contextlib import suppress
 
 import numpy as np
 
-from weldseam.errors import RobotFault
+from weldseam.errors import InputError, RobotConnectionError, RobotFault
+from weldseam.robot.limits import STANDARD_DIGITAL_OUTPUTS
 from weldseam.robot.motion import pose_matrices
 
 POLL_S = 0.008
@@ -38,6 +39,7 @@ class UrClient:
         return self._lost
 
     def connect(self) -> None:
+        """Open the control, receive and IO sessions; RobotConnectionError (nothing moved) if the controller refuses."""
         try:
             import rtde_control
             import rtde_io
@@ -46,8 +48,10 @@ class UrClient:
             self._control = rtde_control.RTDEControlInterface(self.host)
             self._receive = rtde_receive.RTDEReceiveInterface(self.host)
             self._io = rtde_io.RTDEIOInterface(self.host)
-        except RuntimeError as error:
-            raise RobotFault(f"cannot start ur-rtde's control script on {self.host}: {error}; nothing moved") from None
+        except (RuntimeError, ValueError, OSError) as error:
+            raise RobotConnectionError(
+                f"{self.host}: the controller answered but ur-rtde could not start its session ({error}); nothing moved"
+            ) from None
 
     def close(self) -> None:
         if self._lost:
@@ -65,8 +69,9 @@ class UrClient:
     def set_tcp(self, pose: np.ndarray) -> None:
         self._call("setTcp", self._control.setTcp, [float(v) for v in pose])
 
-    def set_payload(self, mass_kg: float) -> None:
-        self._call("setPayload", self._control.setPayload, float(mass_kg), [])
+    def set_payload(self, mass_kg: float, cog_m: np.ndarray) -> None:
+        """Payload mass (kg) and centre of gravity (3,) m from the flange."""
+        self._call("setPayload", self._control.setPayload, float(mass_kg), [float(v) for v in cog_m])
 
     def move_linear(self, pose: np.ndarray, speed_m_s: float, acceleration_m_s2: float) -> None:
         target = [float(v) for v in pose]
@@ -80,7 +85,9 @@ class UrClient:
         self._watch("moveL path", np.asarray(entries)[-1, :6], on_progress, last_index=len(rows) - 1)
 
     def set_digital_output(self, index: int, on: bool) -> None:
-        """Switch a standard digital output and wait until the controller reports it switched."""
+        """Switch a standard digital output (0-7) and wait until the controller reports it switched."""
+        if index not in STANDARD_DIGITAL_OUTPUTS:
+            raise InputError(f"digital output {index}: not a standard digital output (0 to 7)")
         self._check_connection(f"digital output {index}")
         self._call(f"digital output {index}", self._io.setStandardDigitalOut, int(index), bool(on))
         deadline = time.monotonic() + OUTPUT_TIMEOUT_S

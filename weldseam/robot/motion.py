@@ -60,7 +60,8 @@ class MotionPlan:
     """Everything `send` needs, already checked-ready: no geometry is decided after this.
 
     tcp_pose: (6,) TCP (torch tip) relative to the flange, UR pose vector (setTcp).
-    payload_kg: torch mass given to setPayload.
+    payload_kg, payload_cog_m: mass and centre of gravity (3,) m from the flange for setPayload; None leaves
+        the payload configured on the robot untouched.
     weld_speed_m_s: travel speed along the weld.
     move_speed_m_s, acceleration_m_s2: for the approach, retreat and travel moves.
     arc_output: standard digital output that switches the arc, or None for a dry path.
@@ -68,7 +69,8 @@ class MotionPlan:
 
     seams: tuple[SeamMotion, ...]
     tcp_pose: np.ndarray
-    payload_kg: float = 0.0
+    payload_kg: float | None = None
+    payload_cog_m: tuple | None = None
     weld_speed_m_s: float = 0.01
     move_speed_m_s: float = 0.1
     acceleration_m_s2: float = 0.5

@@ -26,7 +26,8 @@ class Shaping:
     angle_tolerance_deg: float = 1.0
     approach_m: float = 0.05
     max_blend_m: float = 0.002
-    payload_kg: float = 0.0
+    payload_kg: float | None = None
+    payload_cog_m: tuple | None = None
     weld_speed_m_s: float = 0.01
     move_speed_m_s: float = 0.1
     acceleration_m_s2: float = 0.5
@@ -63,6 +64,7 @@ def motion_plan(paths: list[WeldPath] | tuple[WeldPath, ...], setup: Shaping) ->
         seams=tuple(seam_motion(path, setup) for path in paths),
         tcp_pose=np.asarray(setup.tcp_pose, dtype=np.float64),
         payload_kg=setup.payload_kg,
+        payload_cog_m=setup.payload_cog_m,
         weld_speed_m_s=setup.weld_speed_m_s,
         move_speed_m_s=setup.move_speed_m_s,
         acceleration_m_s2=setup.acceleration_m_s2,

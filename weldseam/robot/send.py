@@ -1,6 +1,6 @@
 """Execute a checked MotionPlan with a robot client: the fixed sequence, arc safety, Ctrl-C/SIGTERM.
 
-The client (weldseam.robot.client.UrClient or a test double) provides set_tcp, set_payload,
+The client (weldseam.robot.client.UrClient or a test double) provides set_tcp, set_payload(mass_kg, cog_m),
 move_linear(pose6, speed_m_s, acceleration_m_s2), move_path(entries (K, 9), on_progress),
 set_digital_output(index, on), stop() and actual_tcp_pose(); faults raise RobotFault.
 No motion is ever retried.
@@ -9,12 +9,14 @@ No motion is ever retried.
 from __future__ import annotations
 
 import signal
+import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
 import numpy as np
 
-from weldseam.errors import RobotFault
+from weldseam.errors import InputError, RobotFault, StageError
+from weldseam.robot.limits import STANDARD_DIGITAL_OUTPUTS
 from weldseam.robot.motion import MotionPlan, SeamMotion
 
 
@@ -45,24 +47,57 @@ def sigterm_as_interrupt() -> Iterator[None]:
         signal.signal(signal.SIGTERM, previous)
 
 
+@contextmanager
+def _interrupts_held() -> Iterator[None]:
+    """For the duration: Ctrl-C and SIGTERM are ignored, so a second one cannot cut the stop or the arc-off short."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = {number: signal.signal(number, signal.SIG_IGN) for number in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for number, handler in previous.items():
+            signal.signal(number, handler)
+
+
 def _arc(client, plan: MotionPlan, on: bool) -> None:
     if plan.arc_output is not None:
         client.set_digital_output(plan.arc_output, on)
 
 
 def _safe_stop(client, plan: MotionPlan) -> str:
-    """Stop the arm and switch the arc off, each as far as the connection still allows; say what is known."""
-    try:
-        client.stop()
-        stopped = "arm stopped"
-    except Exception:
-        stopped = "stopL not confirmed"
-    try:
-        _arc(client, plan, False)
-        arc = "arc off"
-    except Exception:
-        arc = "ARC OUTPUT NOT CONFIRMED OFF: check the cell"
+    """Stop the arm, then switch the arc off, each as far as the connection still allows; say what is known."""
+    with _interrupts_held():
+        try:
+            client.stop()
+            stopped = "arm stopped"
+        except Exception:
+            stopped = "stopL not confirmed"
+        if plan.arc_output is None:
+            return f"{stopped}, no arc output"
+        try:
+            _arc(client, plan, False)
+            arc = "arc off"
+        except Exception:
+            arc = "ARC OUTPUT NOT CONFIRMED OFF: check the cell"
     return f"{stopped}, {arc}"
+
+
+def _refuse_unsafe(plan: MotionPlan) -> None:
+    """InputError, before the first call to the robot, for a plan no controller should receive."""
+    if plan.arc_output is not None and plan.arc_output not in STANDARD_DIGITAL_OUTPUTS:
+        raise InputError(f"arc output {plan.arc_output}: not a standard digital output (0 to 7); nothing was sent")
+    if (plan.payload_kg is None) != (plan.payload_cog_m is None):
+        raise InputError("a payload needs both its mass and its centre of gravity; nothing was sent")
+
+
+def _where(plan: MotionPlan, seam_index: int, waypoint: int) -> str:
+    if seam_index < 0:
+        return "before the first seam"
+    seam = plan.seams[seam_index]
+    position = f"waypoint {waypoint} of {len(seam.weld_poses)}" if waypoint >= 0 else "before the weld path"
+    return f"seam {seam.seam_id}, {position}"
 
 
 def execute(
@@ -72,17 +107,25 @@ def execute(
     on_progress: Callable[[int, int], None] | None = None,
     on_pose: Callable[[int, int, np.ndarray], None] | None = None,
 ) -> None:
-    """Run the plan: setTcp, setPayload; per seam approach, first weld pose, arc on, one moveL path, arc off, retreat.
+    """Run the plan: setTcp, setPayload (only if the plan has one), arc off; per seam approach, first weld pose,
+    arc on, one moveL path, arc off, retreat.
 
     on_progress(seam_index, waypoint_index) follows the controller's async progress; on_pose(seam_index,
     waypoint_index, actual_tcp_pose6) receives the measured TCP at each progress report.
-    Ctrl-C (or SIGTERM) stops the arm, switches the arc off and re-raises KeyboardInterrupt. A RobotFault
-    switches the arc off, stops, and is re-raised naming the seam and the waypoint.
+    Whatever ends the run early stops the arm, then switches the arc off, and says where and what is known:
+    Ctrl-C (or SIGTERM) re-raises KeyboardInterrupt("at seam S, waypoint W of K: arm stopped, arc off"), a
+    RobotFault is re-raised naming the seam and the waypoint, and any other exception (a bug) becomes
+    StageError("send", ...). A plan with an impossible arc output or half a payload is refused (InputError)
+    before the first call to the client.
     """
+    _refuse_unsafe(plan)
     seam_index, waypoint = -1, -1
     try:
         client.set_tcp(np.asarray(plan.tcp_pose, dtype=float))
-        client.set_payload(plan.payload_kg)
+        if plan.payload_kg is not None:
+            client.set_payload(plan.payload_kg, np.asarray(plan.payload_cog_m, dtype=float))
+        # Outputs outlive programs: a killed earlier run may have left the arc on. Off before the first move.
+        _arc(client, plan, False)
         for seam_index, seam in enumerate(plan.seams):
             waypoint = -1
             client.move_linear(seam.approach_pose, plan.move_speed_m_s, plan.acceleration_m_s2)
@@ -101,12 +144,16 @@ def execute(
             _arc(client, plan, False)
             client.move_linear(seam.retreat_pose, plan.move_speed_m_s, plan.acceleration_m_s2)
     except KeyboardInterrupt:
-        _safe_stop(client, plan)
-        raise
+        state = _safe_stop(client, plan)
+        where = _where(plan, seam_index, waypoint)
+        raise KeyboardInterrupt(f"{'at ' if seam_index >= 0 else ''}{where}: {state}") from None
     except RobotFault as fault:
         state = _safe_stop(client, plan)
-        if seam_index < 0:
-            raise RobotFault(f"{fault} ({state}; nothing retried)") from None
-        seam = plan.seams[seam_index]
-        where = f"waypoint {waypoint} of {len(seam.weld_poses)}" if waypoint >= 0 else "before the weld path"
-        raise RobotFault(f"seam {seam.seam_id}, {where}: {fault} ({state}; nothing retried)") from None
+        raise RobotFault(f"{_where(plan, seam_index, waypoint)}: {fault} ({state}; nothing retried)") from None
+    except Exception as error:
+        state = _safe_stop(client, plan)
+        raise StageError(
+            "send",
+            f"{_where(plan, seam_index, waypoint)}: unexpected {type(error).__name__}: {error} ({state}; "
+            "nothing retried). This is a bug: please report it",
+        ) from error

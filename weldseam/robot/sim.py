@@ -10,13 +10,16 @@ from __future__ import annotations
 
 import ipaddress
 import json
+import queue
 import re
 import socket
 import struct
 import threading
 import time
+from collections.abc import Callable
 from itertools import accumulate
 from pathlib import Path
+from typing import TypeVar
 
 from weldseam.errors import InputError
 from weldseam.io.atomic import atomic_write
@@ -29,6 +32,7 @@ RTDE_PORT, SCRIPT_PORTS, DASHBOARD_PORT = 30004, (30003, 30002), 29999
 CONTROLLER_VERSIONS = {"cb3": (3, 15, 0, 0), "e-series": (5, 11, 0, 0)}
 TICK_S = 0.002
 _PROGRAM_END = re.compile(r"\nend[ \t]*(\n|$)")
+T = TypeVar("T")
 
 
 class RobotSim:
@@ -198,10 +202,9 @@ class RobotSim:
                         return
                 time.sleep(1.0 / output["frequency"])
 
+        read = _delay_line(reader.read, self.faults.latency_s) if self.faults.latency_s else reader.read
         while not self._stopping.is_set():
-            kind, payload = reader.read()
-            if self.faults.latency_s:
-                time.sleep(self.faults.latency_s)
+            kind, payload = read()
             if kind == wire.PROTOCOL_VERSION:
                 send(kind, b"\x01")
             elif kind == wire.CONTROLLER_VERSION:
@@ -223,8 +226,12 @@ class RobotSim:
                 widths = [len(wire.STRUCT_CODES.get(kind, "")) for kind in types]
                 inputs[recipe] = (names, widths, wire.recipe_struct(types) if "NOT_FOUND" not in types else None)
                 send(kind, bytes([recipe]) + ",".join(types).encode())
-            elif kind in (wire.START, wire.PAUSE):
-                (streaming.set if kind == wire.START else streaming.clear)()
+            elif kind == wire.START:
+                # The reply first: ur-rtde reads exactly one packet as the answer to START.
+                send(kind, b"\x01")
+                streaming.set()
+            elif kind == wire.PAUSE:
+                streaming.clear()
                 send(kind, b"\x01")
             elif kind == wire.DATA and payload and payload[0] in inputs:
                 names, widths, layout = inputs[payload[0]]
@@ -251,11 +258,11 @@ class RobotSim:
                 if text.strip():
                     self.controller.load_script(text)
                 return
+            received_s = time.monotonic()
             text += chunk.decode(errors="replace")
             while (program_end := _PROGRAM_END.search(text)) is not None:
                 program, text = text[: program_end.end()], text[program_end.end() :]
-                if self.faults.latency_s:
-                    time.sleep(self.faults.latency_s)
+                time.sleep(max(0.0, received_s + self.faults.latency_s - time.monotonic()))
                 self.controller.load_script(program)
 
     def _serve_dashboard(self, connection: socket.socket) -> None:
@@ -281,7 +288,38 @@ class RobotSim:
         if request == "unlock protective stop":
             controller.unlock_protective_stop()
             return "Protective stop releasing"
+        if request == "stop":
+            # ur-rtde's constructor stops a control script it finds running through here, and raises unless the
+            # reply is exactly "Stopped".
+            controller.stop_program("dashboard stop")
+            return "Stopped"
         return replies.get(request, f"{request}: ok")
+
+
+def _delay_line(read: Callable[[], T], latency_s: float) -> Callable[[], T]:
+    """`read`, each item released latency_s after it arrived (an exception too): a slow network, order kept and
+    the delays not added up, rather than a queue that handles one packet per latency_s."""
+    arrivals: queue.SimpleQueue = queue.SimpleQueue()
+
+    def receive() -> None:
+        while True:
+            try:
+                item = read()
+            except Exception as error:
+                arrivals.put((time.monotonic(), error))
+                return
+            arrivals.put((time.monotonic(), item))
+
+    threading.Thread(target=receive, daemon=True).start()
+
+    def delayed() -> T:
+        arrived_s, item = arrivals.get()
+        time.sleep(max(0.0, arrived_s + latency_s - time.monotonic()))
+        if isinstance(item, Exception):
+            raise item
+        return item
+
+    return delayed
 
 
 def _zeros(kind: str) -> tuple:

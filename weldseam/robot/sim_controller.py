@@ -43,7 +43,8 @@ class Faults:
 
     protective_stop_at: the arm stops on reaching this waypoint and the control script stops.
     disconnect_at: every connection drops on reaching this waypoint (a pulled cable).
-    latency_s: every packet from a client is handled this late (a slow controller).
+    latency_s: every packet from a client is handled this long after it arrived (a slow network: packets sent
+        together arrive together, in order).
     """
 
     protective_stop_at: int | None = None
@@ -193,6 +194,14 @@ class SimController:
             self.async_op_id = self.async_changes = 0
             self._write_progress(-1)
             self.out_int[0] = READY
+
+    def stop_program(self, reason: str) -> None:
+        """The program stops as on the pendant's stop button: the arm halts where it is."""
+        with self.lock:
+            if self.program_running:
+                self._halt()
+                self._stop_program()
+                self._event("program_stopped", reason=reason, tcp_pose=self.tcp_pose())
 
     def unlock_protective_stop(self) -> None:
         with self.lock:

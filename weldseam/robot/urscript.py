@@ -16,8 +16,12 @@ def _movel(pose: np.ndarray, acceleration_m_s2: float, speed_m_s: float, blend_m
 
 
 def urscript(plan: MotionPlan) -> str:
-    """URScript text: set_tcp, set_payload, then per seam approach, arc on, weld movels, arc off, retreat."""
-    lines = ["def weldseam_program():", f"  set_tcp({_pose(plan.tcp_pose)})", f"  set_payload({plan.payload_kg:.9g})"]
+    """URScript text: set_tcp, set_payload (only when the plan has one), then per seam approach, arc on, weld
+    movels, arc off, retreat."""
+    lines = ["def weldseam_program():", f"  set_tcp({_pose(plan.tcp_pose)})"]
+    if plan.payload_kg is not None:
+        cog = ", ".join(f"{value:.9g}" for value in plan.payload_cog_m)
+        lines.append(f"  set_payload({plan.payload_kg:.9g}, [{cog}])")
     move = (plan.acceleration_m_s2, plan.move_speed_m_s)
     for seam in plan.seams:
         lines += [f"  # seam {seam.seam_id}", _movel(seam.approach_pose, *move), _movel(seam.weld_poses[0], *move)]
