@@ -25,7 +25,9 @@ EXIT_CODES = (
     (4, "a pose is unreachable (refused before any motion)"),
     (5, "robot fault (the robot was stopped)"),
     (70, "internal error (a bug: please report it with the input)"),
+    (129, "hung up (SIGHUP; batch stops its workers and keeps what finished)"),
     (130, "interrupted (Ctrl-C)"),
+    (143, "terminated (SIGTERM; batch stops its workers and keeps what finished)"),
 )
 EXIT_ROBOT_FAULT = 5
 EXIT_FOR = (
