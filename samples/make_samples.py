@@ -8,14 +8,18 @@ Each sample is a synthetic D415-like scan of one workpiece family with a fixed s
 - fillet_t.png: a raw 16-bit depth image (1 mm units) in the camera frame, with
   d415.intrinsics.json and fillet_t.pose.json (T_base_camera);
 - <name>.truth.json: the ground-truth seams the camera saw (for tests);
-- golden/<name>.json: the path weldseam plans for it (for regression checks).
+- golden/<name>.json: the path weldseam plans for it (for regression checks);
+- ../docs/report.png: the README's picture, v_butt's HTML report as headless chromium shows it
+  (left as it is, with a note, when chromium is not installed).
 """
 
 from __future__ import annotations
 
 import json
+import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -72,6 +76,30 @@ def main() -> None:
             cwd=HERE, check=True,
         )
         print(f"samples/{name}: scan, truth and golden path written")
+    write_report_picture(HERE.parent / "docs" / "report.png")
+
+
+def write_report_picture(target: Path) -> None:
+    """The v_butt report page, rendered by headless chromium (network closed) at 1200 x 900."""
+    chromium = shutil.which("chromium")
+    if chromium is None:
+        print(f"{target}: not redrawn (needs chromium: apt-get install chromium)")
+        return
+    with tempfile.TemporaryDirectory() as work:
+        page = Path(work) / "report.html"
+        subprocess.run(
+            [sys.executable, "-m", "weldseam.cli", "plan", "v_butt.ply", "--camera-pose", "v_butt.pose.json",
+             "-o", str(Path(work) / "path.json"), "--report", str(page), "-q"],
+            cwd=HERE, check=True,
+        )  # fmt: skip
+        subprocess.run(
+            [chromium, "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+             "--disable-component-update", "--disable-sync", "--no-first-run", f"--user-data-dir={work}/profile",
+             "--host-resolver-rules=MAP * ~NOTFOUND", "--hide-scrollbars", "--window-size=1200,900",
+             "--virtual-time-budget=20000", f"--screenshot={target}", page.as_uri()],
+            capture_output=True, check=True,
+        )  # fmt: skip
+    print(f"{target}: redrawn")
 
 
 if __name__ == "__main__":

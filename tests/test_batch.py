@@ -122,7 +122,29 @@ def test_a_worker_that_dies_fails_its_scan_only(tmp_path):
     assert {name: r.status for name, r in results.items()} == {
         "part0.ply": "ok", "part1.ply": "failed", "part2.ply": "ok", "part3.ply": "ok"
     }
-    assert "crashed" in results["part1.ply"].error
+    assert results["part1.ply"].error == "the worker process crashed on this scan (exit code 9)"
+
+
+def killed_on_second(job):
+    """A stand-in for the out-of-memory killer."""
+    import os
+    import signal
+
+    from weldseam.batch import JobResult
+
+    if job.scan.endswith("1.ply"):
+        os.kill(os.getpid(), signal.SIGKILL)
+    return JobResult(job.scan, job.output, "ok", seams=1)
+
+
+def test_a_killed_worker_fails_its_scan_only_and_says_by_what(tmp_path):
+    from weldseam.batch import run_local
+
+    scans = [touch(tmp_path / f"part{k}.ply") for k in range(5)]
+    results = {Path(r.scan).name: r for r in run_local(jobs_for(scans, tmp_path / "out"), 2, work=killed_on_second)}
+    assert sorted(results) == [f"part{k}.ply" for k in range(5)]
+    assert [name for name, r in results.items() if r.status != "ok"] == ["part1.ply"]
+    assert results["part1.ply"].error == "the worker process was killed by SIGKILL on this scan"
 
 
 def test_a_glob_takes_scans_and_leaves_their_sidecars(tmp_path):

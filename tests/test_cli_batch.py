@@ -1,6 +1,7 @@
 """`weldseam batch` run as a user would: a folder with a corrupt scan, resume, dask, Ctrl-C."""
 
 import csv
+import os
 import json
 import shutil
 import signal
@@ -188,3 +189,122 @@ def test_a_bad_hand_eye_file_stops_the_batch_before_any_scan(captures, tmp_path)
     assert result.returncode == 2
     assert result.stderr.decode().strip() == f'Error: {bad}: an eye-in-hand file needs "T_flange_camera" (a 4x4 matrix)'
     assert not (tmp_path / "out" / "summary.csv").exists()
+
+
+@pytest.fixture
+def eight_scans(tmp_path):
+    many = tmp_path / "many"
+    many.mkdir()
+    for k in range(8):
+        shutil.copy(SAMPLES / "v_butt.ply", many / f"part{k}.ply")
+        shutil.copy(SAMPLES / "v_butt.pose.json", many / f"part{k}.pose.json")
+    return many
+
+
+def processes_in_session(session: int) -> list[str]:
+    """The processes left in a session, after giving the dying ones up to 10 s."""
+    for _ in range(100):
+        left = subprocess.run(["pgrep", "-s", str(session)], capture_output=True, text=True).stdout.split()
+        if not left:
+            return []
+        time.sleep(0.1)
+    return left
+
+
+def start_batch(scans: Path, out: Path, jobs: int) -> subprocess.Popen:
+    """A batch in its own session (a supervisor's child), once its first scan is done."""
+    process = subprocess.Popen(
+        [sys.executable, "-m", "weldseam.cli", "batch", str(scans), "-o", str(out), "--jobs", str(jobs)],
+        stderr=subprocess.PIPE,
+        start_new_session=True,
+    )
+    assert process.stderr.readline().startswith(b"[1/8] ok")
+    return process
+
+
+@pytest.mark.skipif(shutil.which("pgrep") is None, reason="needs pgrep to see the processes left")
+@pytest.mark.parametrize("to_group", [False, True], ids=["main-process", "process-group"])
+@pytest.mark.parametrize(("signum", "code"), [(signal.SIGINT, 130), (signal.SIGTERM, 143), (signal.SIGHUP, 129)])
+def test_a_stop_signal_ends_the_batch_and_its_workers_and_keeps_what_finished(
+    eight_scans, tmp_path, signum, code, to_group
+):
+    out = tmp_path / "out"
+    process = start_batch(eight_scans, out, jobs=2)
+    (os.killpg if to_group else os.kill)(process.pid, signum)
+    _, rest = process.communicate(timeout=60)  # the old batch never exited after a SIGINT to it alone
+    assert process.returncode == code, rest.decode()
+    assert rest.decode().strip().splitlines()[-1].startswith(f"Error: interrupted by {signum.name}: ")
+    assert processes_in_session(process.pid) == []  # no orphaned worker goes on planning
+    written = sorted(path.name for path in out.glob("part*.json"))
+    rows = summary_rows(out)
+    assert 1 <= len(rows) < 8 and all(row["status"] == "ok" for row in rows.values())
+    assert sorted(f"{Path(name).stem}.json" for name in rows) == written  # every finished output, and only those
+    assert not [path for path in out.iterdir() if path.name.endswith(".tmp")]
+
+
+@pytest.mark.skipif(shutil.which("pgrep") is None, reason="needs pgrep to see the processes left")
+def test_a_sigterm_to_a_one_process_batch_stops_its_helper_process_silently(eight_scans, tmp_path):
+    out = tmp_path / "out"
+    process = start_batch(eight_scans, out, jobs=1)
+    os.killpg(process.pid, signal.SIGTERM)
+    _, rest = process.communicate(timeout=60)
+    assert process.returncode == 143
+    assert rest.decode().strip().splitlines()[-1].startswith("Error: interrupted by SIGTERM: ")
+    assert "Traceback" not in rest.decode()
+    assert processes_in_session(process.pid) == []
+    assert all(row["status"] == "ok" for row in summary_rows(out).values())
+
+
+@pytest.mark.skipif(shutil.which("pgrep") is None, reason="needs pgrep to see the processes left")
+def test_workers_die_with_a_killed_main_process(eight_scans, tmp_path):
+    """SIGKILL (the out-of-memory killer) cannot be caught: the kernel stops the workers."""
+    process = start_batch(eight_scans, tmp_path / "out", jobs=2)
+    process.kill()
+    process.wait(timeout=60)
+    assert processes_in_session(process.pid) == []
+
+
+def test_the_summary_lists_every_warning_of_each_scan_as_plan_prints_them(tmp_path):
+    scans = tmp_path / "scans"
+    scans.mkdir()
+    shutil.copy(SAMPLES / "v_butt.ply", scans / "v_butt.ply")  # no pose: the normals' guess is a warning
+    shutil.copy(SAMPLES / "fillet_t.png", scans / "fillet_t.png")  # no pose: the camera frame is a warning
+    shutil.copy(SAMPLES / "d415.intrinsics.json", scans / "intrinsics.json")
+    printed = {}
+    for name, extra in (("v_butt.ply", []), ("fillet_t.png", ["--intrinsics", scans / "intrinsics.json"])):
+        plan = weldseam("plan", scans / name, *extra, "-o", tmp_path / f"{name}.json")
+        assert plan.returncode == 0, plan.stderr
+        lines = plan.stderr.decode().splitlines()
+        printed[name] = [line.removeprefix("Warning: ") for line in lines if line.startswith("Warning: ")]
+        assert printed[name]
+    out = tmp_path / "out"
+    for run in range(2):  # the second run skips both scans and keeps their warnings
+        assert weldseam("batch", scans, "-o", out, "-q").returncode == 0
+        listed = {Path(row["scan"]).name: row["warnings"] for row in json.loads((out / "summary.json").read_text())}
+        assert listed == printed
+        assert {name: row["warnings"] for name, row in summary_rows(out).items()} == {
+            name: " | ".join(warnings) for name, warnings in printed.items()
+        }
+    assert {row["status"] for row in summary_rows(out).values()} == {"skipped"}
+
+
+@pytest.mark.parametrize(
+    ("folder", "problem"),
+    [
+        ("{file}/out", "cannot create the output folder (Not a directory)"),
+        ("{file}", "exists and is not a folder"),
+        ("{unwritable}", "cannot write in the output folder (Permission denied)"),
+    ],
+)
+def test_an_output_folder_that_cannot_be_written_is_one_line_before_any_scan(tmp_path, folder, problem):
+    a_file = tmp_path / "a_file"
+    a_file.write_text("")
+    if os.geteuid() == 0:  # root writes in any folder of its own; sysfs refuses it
+        unwritable = Path("/sys")
+    else:
+        unwritable = tmp_path / "locked"
+        unwritable.mkdir(mode=0o500)
+    out = folder.format(file=a_file, unwritable=unwritable)
+    result = weldseam("batch", SAMPLES / "v_butt.ply", "-o", out)
+    assert result.returncode == 2
+    assert result.stderr.decode() == f"Error: {out}: {problem}\n"  # nothing planned, no traceback

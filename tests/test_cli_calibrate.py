@@ -69,10 +69,16 @@ def test_eye_in_hand_from_joint_angles_writes_T_flange_camera(eye_in_hand, tmp_p
     assert document["setup"] == "eye-in-hand" and document["captures"] == 10
     assert_near(document["T_flange_camera"], truth)
     lines = result.stderr.splitlines()
-    assert lines[0].split() == ["method", "centre", "mm", "rotation", "deg", "corners", "mm"]
+    assert lines[0].split() == ["method", "error", "mm", "error", "deg", "scatter", "mm", "scatter", "deg", "corners",
+                                "mm"]  # fmt: skip
     chosen = [line for line in lines if line.endswith("<- chosen")]
     assert len(chosen) == 1 and chosen[0].startswith(document["method"])
-    assert lines[-1].startswith(f"{tmp_path / 'H.json'}: eye-in-hand, {document['method']}, 10 captures; board ")
+    error = document["residuals"]["leave_one_out"]
+    assert lines[-1].startswith(
+        f"{tmp_path / 'H.json'}: eye-in-hand, {document['method']}, 10 captures; estimated error "
+        f"{error['translation_mm']:.2f} mm / {error['rotation_deg']:.3f} deg (leave-one-out); board scatter "
+    )
+    assert float(chosen[0].split()[1]) == pytest.approx(error["translation_mm"], abs=5e-4)
     assert result.stdout == ""
 
 
@@ -101,7 +107,9 @@ def test_json_table_on_stdout_and_a_chosen_method(eye_in_hand, tmp_path):
     assert [row["chosen"] for row in table["methods"]] == [True, False, False, False, False]
     document = json.loads((tmp_path / "H.json").read_text())
     assert document["method"] == "tsai"
-    assert document["residuals"]["per_method"]["park"]["corners_mm"] == table["methods"][1]["corners_mm"]
+    assert document["residuals"]["per_method"]["park"] == {
+        key: value for key, value in table["methods"][1].items() if key not in ("method", "chosen")
+    }
 
 
 def test_the_hand_eye_file_can_go_to_stdout(eye_in_hand):
@@ -154,7 +162,7 @@ def test_an_image_of_another_size_than_the_intrinsics_is_refused(capture_copy, t
         (lambda m: m.update(board={"type": "chessboard", "columns": 9, "rows": 7, "square_mm": 20}),
          "board: a chessboard of 9x7 inner corners looks the same turned by 180 degrees"),
         (lambda m: m.update(distortion=[0.1, 0.2]), "distortion must be a list of 4, 5, 8, 12 or 14 numbers"),
-        (lambda m: m.update(captures=m["captures"][:2]), "needs at least 3 captures, got 2; take 10-20"),
+        (lambda m: m.update(captures=m["captures"][:2]), "needs at least 6 captures (to check the answer by leaving each out), got 2; take 10-20"),
     ],
 )
 def test_bad_manifests_are_one_line_naming_the_file_and_the_problem(capture_copy, tmp_path, change, message):
@@ -222,3 +230,37 @@ def test_the_file_written_is_the_one_plan_reads(setup, request, tmp_path):
     hand_eye = read_hand_eye(output)
     assert hand_eye.setup == setup.replace("_", "-")
     assert_near(hand_eye.transform, truth)
+
+
+def run_cli(*args):
+    """The installed command in a process of its own: what reaches file descriptor 2 is what the user sees."""
+    return subprocess.run([sys.executable, "-m", "weldseam.cli", *map(str, args)], capture_output=True, text=True,
+                          timeout=120)  # fmt: skip
+
+
+@pytest.mark.parametrize("count", [3, 4])
+def test_three_or_four_captures_are_refused_before_any_image_is_read(capture_copy, tmp_path, count):
+    """3 captures were accepted with 0.51 mm board scatter while the transform was 5.3 mm / 0.8 deg off."""
+    edit_manifest(capture_copy, lambda m: m.update(captures=m["captures"][:count]))
+    (capture_copy.parent / "cap01.png").write_bytes(b"not read")
+    result = run_cli("calibrate", "hand-eye", capture_copy, "-o", tmp_path / "H.json")
+    assert result.returncode == 2
+    assert result.stderr == (
+        f"Error: {capture_copy}: hand-eye calibration needs at least 6 captures (to check the answer by leaving "
+        f"each out), got {count}; take 10-20, and tilt the flange by 15-30 deg about at least two different axes "
+        "between captures\n"
+    )
+
+
+def test_opencv_lines_about_a_broken_image_stay_out_of_the_terminal(capture_copy, tmp_path):
+    image = capture_copy.parent / "cap03.png"
+    image.write_bytes(image.read_bytes()[:3000])  # OpenCV: "[ WARN...] PNG input buffer is incomplete"
+    result = run_cli("calibrate", "hand-eye", capture_copy, "-o", tmp_path / "H.json")
+    assert result.returncode == 2
+    assert result.stderr == f"Error: {image}: not a readable image (PNG, JPEG, BMP, TIFF)\n"
+
+
+def test_the_help_states_the_capture_rule():
+    text = " ".join(weldseam("calibrate", "hand-eye", "--help").stdout.split())
+    assert "Refused, before any image is read: fewer than 6 captures;" in text
+    assert "a set that breaks either rule once any one capture is left out" in text

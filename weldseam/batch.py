@@ -10,6 +10,7 @@ relative to the folder all scans share, so the outputs mirror the inputs; when t
 one folder share a name, the ones after the first keep their extension (`NAME.EXT.json`). A scan whose output
 exists and was made from the same bytes (scan and sidecars) with the same settings is skipped
 (the record is `OUTDIR/.weldseam-batch.json`), so an interrupted batch resumes where it stopped.
+SIGINT, SIGTERM or SIGHUP stop a batch within seconds, keeping what finished (batch_workers.py).
 """
 
 from __future__ import annotations
@@ -18,17 +19,22 @@ import glob
 import hashlib
 import json
 import os
+import tempfile
 import time
 from collections.abc import Callable, Iterator
+from contextlib import closing
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
+from weldseam.batch_workers import StopSignals, WorkerDied, run_in_processes
 from weldseam.errors import InputError, NoSeamError, WeldseamError
 from weldseam.io.atomic import atomic_write
 
 SCAN_SUFFIXES = (".ply", ".pcd", ".xyz", ".txt", ".npy", ".png")
 STATE_FILE = ".weldseam-batch.json"
-SUMMARY_FIELDS = ("scan", "output", "status", "seams", "length_m", "seconds", "error")
+SUMMARY_FIELDS = ("scan", "output", "status", "seams", "length_m", "seconds", "error", "warnings")
+# Between the warnings of one scan in summary.csv (summary.json has a list).
+WARNING_SEPARATOR = " | "
 
 
 @dataclass(frozen=True)
@@ -52,7 +58,8 @@ class BatchJob:
 
 @dataclass(frozen=True)
 class JobResult:
-    """One line of the summary. status: ok, no-seam, failed or skipped."""
+    """One line of the summary. status: ok, no-seam, failed or skipped. warnings: every warning of
+    the scan's run (reading it and planning it), as `plan` prints them."""
 
     scan: str
     output: str
@@ -61,10 +68,28 @@ class JobResult:
     length_m: float = 0.0
     seconds: float = 0.0
     error: str = ""
+    warnings: tuple[str, ...] = ()
 
     @property
     def failed(self) -> bool:
         return self.status in ("failed", "no-seam")
+
+
+def prepare_output_folder(out_dir: Path) -> None:
+    """Create OUTDIR if needed and prove it writable (a file created there and removed), so that a
+    bad -o is one InputError before any scan is planned."""
+    if out_dir.exists() and not out_dir.is_dir():
+        raise InputError(f"{out_dir}: exists and is not a folder")
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise InputError(f"{out_dir}: cannot create the output folder ({error.strerror or error})") from None
+    try:
+        descriptor, probe = tempfile.mkstemp(prefix=".weldseam-probe-", dir=out_dir)
+    except OSError as error:
+        raise InputError(f"{out_dir}: cannot write in the output folder ({error.strerror or error})") from None
+    os.close(descriptor)
+    os.unlink(probe)
 
 
 def find_scans(inputs: list[str]) -> list[Path]:
@@ -180,7 +205,7 @@ def run_job(job: BatchJob) -> JobResult:
         from weldseam.io.scan import load_scan
         from weldseam.pipeline.run import plan_paths
 
-        scan, _ = load_scan(
+        scan, notes = load_scan(
             job.scan_file,
             intrinsics_path=job.intrinsics,
             T_base_camera=_camera_pose(job),
@@ -198,6 +223,7 @@ def run_job(job: BatchJob) -> JobResult:
             len(result.paths),
             round(sum(p.length_m for p in result.paths), 6),
             round(time.perf_counter() - started, 3),
+            warnings=tuple(dict.fromkeys([*notes, *result.warnings])),
         )
     except NoSeamError as error:
         status, message = "no-seam", str(error)
@@ -219,7 +245,8 @@ def up_to_date(jobs: list[BatchJob], out_dir: Path) -> dict[str, JobResult]:
         record = state.get(os.path.relpath(job.output, out_dir))
         if isinstance(record, dict) and record.get("fingerprint") == job.fingerprint and Path(job.output).is_file():
             seams, length = record.get("seams", 0), record.get("length_m", 0.0)
-            skipped[job.output] = JobResult(job.scan, job.output, "skipped", seams, length)
+            warnings = tuple(record.get("warnings", ()))
+            skipped[job.output] = JobResult(job.scan, job.output, "skipped", seams, length, warnings=warnings)
     return skipped
 
 
@@ -238,49 +265,30 @@ def save_state(jobs: list[BatchJob], results: list[JobResult], out_dir: Path) ->
                 "fingerprint": job.fingerprint,
                 "seams": result.seams,
                 "length_m": result.length_m,
+                "warnings": list(result.warnings),
             }
     atomic_write(path, (json.dumps(state, indent=1, sort_keys=True) + "\n").encode())
 
 
 def run_local(
-    jobs: list[BatchJob], workers: int, work: Callable[[BatchJob], JobResult] = run_job
+    jobs: list[BatchJob],
+    workers: int,
+    work: Callable[[BatchJob], JobResult] = run_job,
+    stop: StopSignals | None = None,
 ) -> Iterator[JobResult]:
     """Results in completion order, from `workers` processes (in this process when 1).
 
-    A worker that dies (a crash, the out-of-memory killer) breaks its pool: the unfinished
-    scans then run again one process at a time, so the scan that kills its worker is found,
-    reported as failed, and the others still run. Ctrl-C stops the workers at once.
+    A worker that dies (a crash, the out-of-memory killer) fails its own scan only; the others
+    go on in a new worker. A stop signal (`stop`) ends the workers within seconds
+    (batch_workers.py) and raises Interrupted.
     """
     if workers <= 1 or len(jobs) <= 1:
         yield from map(work, jobs)
         return
-    from concurrent.futures import ProcessPoolExecutor, as_completed
-    from concurrent.futures.process import BrokenProcessPool
-
-    remaining, size = list(jobs), min(workers, len(jobs))
-    while remaining:
-        executor = ProcessPoolExecutor(max_workers=size)
-        futures = {executor.submit(work, job): job for job in remaining}
-        broken = False
-        try:
-            for future in as_completed(futures):
-                try:
-                    result = future.result()
-                except BrokenProcessPool:
-                    broken = True
-                    continue
-                remaining.remove(futures[future])
-                yield result
-        except BaseException:
-            for process in list(getattr(executor, "_processes", {}).values()):
-                process.terminate()
-            executor.shutdown(wait=False, cancel_futures=True)
-            raise
-        executor.shutdown(wait=True)
-        if broken and size == 1:  # one at a time: the first unfinished scan killed its worker
-            culprit = remaining.pop(0)
-            yield JobResult(culprit.scan, culprit.output, "failed", error="the worker process crashed on this scan")
-        size = 1 if broken else size
+    for job, result in run_in_processes(work, jobs, min(workers, len(jobs)), stop):
+        if isinstance(result, WorkerDied):
+            result = JobResult(job.scan, job.output, "failed", error=str(result))
+        yield result
 
 
 def run_dask(jobs: list[BatchJob], scheduler: str) -> Iterator[JobResult]:
@@ -295,19 +303,24 @@ def run_dask(jobs: list[BatchJob], scheduler: str) -> Iterator[JobResult]:
         raise InputError(f"--scheduler {scheduler}: cannot connect ({error})") from None
     try:
         futures = client.map(run_job, jobs, pure=False)
-        for future in as_completed(futures):
-            yield future.result()
+        try:
+            for future in as_completed(futures):
+                yield future.result()
+        finally:
+            client.cancel(futures)  # after an interrupt, what has not started never starts
     finally:
         client.close()
 
 
 def write_summary(results: list[JobResult], out_dir: Path) -> None:
-    """summary.json and summary.csv in OUTDIR, rows in scan order."""
+    """summary.json and summary.csv in OUTDIR, rows in scan order (in the CSV, a scan's warnings
+    are joined by WARNING_SEPARATOR)."""
     rows = sorted((asdict(result) for result in results), key=lambda row: row["scan"])
     atomic_write(out_dir / "summary.json", (json.dumps(rows, indent=2) + "\n").encode())
     lines = [",".join(SUMMARY_FIELDS)]
     for row in rows:
-        lines.append(",".join(_csv_cell(row[name]) for name in SUMMARY_FIELDS))
+        cells = {**row, "warnings": WARNING_SEPARATOR.join(row["warnings"])}
+        lines.append(",".join(_csv_cell(cells[name]) for name in SUMMARY_FIELDS))
     atomic_write(out_dir / "summary.csv", ("\n".join(lines) + "\n").encode())
 
 
@@ -324,19 +337,22 @@ def run_batch(
     scheduler: str | None,
     force: bool,
     on_result: Callable[[JobResult], None] = lambda result: None,
+    stop: StopSignals | None = None,
 ) -> list[JobResult]:
     """Run the jobs not already up to date, report each result as it completes, and write the
-    summary and the resume record (also when interrupted: then for what finished)."""
+    summary and the resume record (also when interrupted: then for what finished). With `stop`
+    open, a stop signal ends the run (Interrupted) after the workers have stopped."""
     current = {} if force else up_to_date(jobs, out_dir)
     results = list(current.values())
     for result in results:
         on_result(result)
     pending = [job for job in jobs if job.output not in current]
     try:
-        stream = run_dask(pending, scheduler) if scheduler else run_local(pending, workers)
-        for result in stream:
-            results.append(result)
-            on_result(result)
+        stream = run_dask(pending, scheduler) if scheduler else run_local(pending, workers, stop=stop)
+        with closing(stream):  # an error here stops the workers now, not when the generator is collected
+            for result in stream:
+                results.append(result)
+                on_result(result)
     finally:
         write_summary(results, out_dir)
         save_state(jobs, results, out_dir)

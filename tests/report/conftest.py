@@ -21,3 +21,13 @@ def plate_and_path():
         "input": {"path": "plate.ply", "points": 50000, "sha256": "abc"},
     }
     return points, [WeldPath(0, positions, rotations)], record
+
+
+@pytest.fixture(scope="module")
+def rng_points_60k(plate_and_path):
+    """The plate at 120k points: more than the default point budget."""
+    _, paths, record = plate_and_path
+    rng = np.random.default_rng(1)
+    points = np.column_stack([rng.uniform(-0.1, 0.1, 120000), rng.uniform(-0.05, 0.05, 120000),
+                              rng.normal(0, 2e-4, 120000)])  # fmt: skip
+    return points, paths, record

@@ -1,17 +1,22 @@
+import base64
+import gzip
 import json
 import re
 
 import numpy as np
 
 from weldseam.report.figure import make_drawing
-from weldseam.report.html import FIGURE_ID, report_html
+from weldseam.report.html import report_html
+
+
+def unpacked(page: str, script_id: str) -> str:
+    """The text a packed <script> of the page holds (base64 of gzip), as the page's loader unpacks it."""
+    packed = re.search(rf'<script type="application/octet-stream" id="{script_id}">([^<]*)</script>', page).group(1)
+    return gzip.decompress(base64.b64decode(packed)).decode("utf-8")
 
 
 def embedded_figure(page: str) -> list[dict]:
-    start = page.index("Plotly.newPlot(")
-    start = page.index("[", page.index(f'"{FIGURE_ID}"', start))
-    data, _ = json.JSONDecoder().raw_decode(page, start)
-    return data
+    return json.loads(unpacked(page, "weldseam-figure-data"))["data"]
 
 
 def test_the_page_holds_the_scan_the_path_its_axes_and_its_ends(plate_and_path):
@@ -40,3 +45,39 @@ def test_the_page_needs_no_network(plate_and_path):
     assert "http" not in markup
     assert {trace["type"] for trace in embedded_figure(page)} == {"scatter3d"}
     assert "MathJax.js" not in page and "cdn.plot.ly/plotly" not in page
+
+
+def test_the_page_embeds_plotly_js_whole_and_a_figure_plotly_accepts(plate_and_path):
+    import plotly.io
+    from plotly.offline import get_plotlyjs
+
+    points, paths, record = plate_and_path
+    page = report_html(make_drawing(points, paths, point_budget=500), record, "plate")
+    assert unpacked(page, "weldseam-plotly-js") == get_plotlyjs()
+    figure = json.loads(unpacked(page, "weldseam-figure-data"))
+    assert plotly.io.from_json(json.dumps(figure)).layout.title.text == "plate"  # plotly's own schema check
+    assert figure["layout"]["margin"]["r"] > 0  # room for the colour bar
+
+
+def test_scan_points_are_written_to_0_1_mm_and_paths_to_1_um(plate_and_path):
+    points, (path,), record = plate_and_path
+    drawing = make_drawing(points, [path], point_budget=2000)
+    traces = {trace["name"]: trace for trace in embedded_figure(report_html(drawing, record, "plate"))}
+    scan = np.column_stack([traces["scan"]["x"], traces["scan"]["y"], traces["scan"]["z"]])
+    assert np.abs(scan - drawing.scan_m).max() <= 0.5e-4 + 1e-12
+    assert np.array_equal(scan, np.round(drawing.scan_m, 4))
+    line = traces["seam 0 (v_groove)"]
+    assert np.abs(np.column_stack([line["x"], line["y"], line["z"]]) - path.positions_m).max() <= 0.5e-6 + 1e-12
+    colour = np.array(traces["scan"]["marker"]["color"])
+    span = traces["scan"]["marker"]["cmax"] - traces["scan"]["marker"]["cmin"]
+    assert np.abs(colour - drawing.scan_values).max() <= span / 1000
+
+
+def test_a_report_of_60k_points_stays_under_3_mb_and_is_deterministic(rng_points_60k):
+    """It was 10.3 MB: plotly.js 4.8 MB and the points at full float precision 5.5 MB."""
+    points, paths, record = rng_points_60k
+    drawing = make_drawing(points, paths)  # the default budget
+    assert len(drawing.scan_m) == 60000
+    page = report_html(drawing, record, "plate")
+    assert len(page.encode("utf-8")) < 3_000_000
+    assert report_html(drawing, record, "plate") == page

@@ -1,18 +1,23 @@
 import io
 
 import numpy as np
-from PIL import Image
+import pytest
+from PIL import Image, ImageDraw
 
 from weldseam.report.figure import make_drawing
-from weldseam.report.png import PATH_RGB, _Projection, report_png
+from weldseam.report.png import HEIGHT, PANEL_RGB, PATH_RGB, TEXT_RGB, VIEW_WIDTH, WIDTH, _Projection, font, report_png
+
+
+def png_pixels(drawing, record) -> np.ndarray:
+    return np.asarray(Image.open(io.BytesIO(report_png(drawing, record, "plate"))).convert("RGB"))
 
 
 def test_the_png_shows_the_scan_and_the_path_where_it_projects(plate_and_path):
-    points, paths, _ = plate_and_path
+    points, paths, record = plate_and_path
     drawing = make_drawing(points, paths, point_budget=20000)
-    image = np.asarray(Image.open(io.BytesIO(report_png(drawing, "plate"))).convert("RGB")).astype(int)
-    assert image.shape == (800, 1200, 3)
-    assert image.std() > 20  # not blank
+    image = png_pixels(drawing, record).astype(int)
+    assert image.shape == (HEIGHT, WIDTH, 3)
+    assert image[:, :VIEW_WIDTH].std() > 20  # not blank
     project = _Projection(np.vstack([drawing.scan_m, paths[0].positions_m]))
     pixels, _ = project(paths[0].positions_m[5:-5])  # away from the start/end marks
     hits = 0
@@ -23,6 +28,55 @@ def test_the_png_shows_the_scan_and_the_path_where_it_projects(plate_and_path):
 
 
 def test_the_png_is_deterministic(plate_and_path):
-    points, paths, _ = plate_and_path
+    points, paths, record = plate_and_path
     drawing = make_drawing(points, paths, point_budget=5000)
-    assert report_png(drawing, "plate") == report_png(drawing, "plate")
+    assert report_png(drawing, record, "plate") == report_png(drawing, record, "plate")
+
+
+def text_stamp(text: str) -> np.ndarray:
+    """`text` as the PNG draws it (Pillow's font, black on the panel's white), cropped to its ink."""
+    canvas = Image.new("RGB", (20 + int(font().getlength(text)), 40), PANEL_RGB)
+    ImageDraw.Draw(canvas).text((10, 10), text, fill=TEXT_RGB, font=font())
+    pixels = np.asarray(canvas)
+    ink = np.argwhere(np.any(pixels != PANEL_RGB, axis=2))
+    (top, left), (bottom, right) = ink.min(axis=0), ink.max(axis=0) + 1
+    return pixels[top:bottom, left:right]
+
+
+def panel_shows(panel: np.ndarray, text: str) -> bool:
+    """Whether the exact pixels of `text` appear somewhere in the panel."""
+    cv2 = pytest.importorskip("cv2")
+    stamp = text_stamp(text)
+    scores = cv2.matchTemplate(panel.astype(np.float32), stamp.astype(np.float32), cv2.TM_SQDIFF)
+    y, x = np.unravel_index(scores.argmin(), scores.shape)  # the best match, then checked pixel for pixel
+    return np.array_equal(panel[y : y + stamp.shape[0], x : x + stamp.shape[1]], stamp)
+
+
+def test_the_png_has_the_html_panels_seam_table_and_warnings(plate_and_path):
+    """It promised the same content as the HTML and had neither."""
+    points, paths, record = plate_and_path
+    record = {
+        **record,
+        "seams": [
+            {"id": 0, "joint": "v_groove", "length_m": 0.16, "confidence": 0.9, "closed": False, "poses": [{}] * 81},
+            {"id": 7, "joint": "fillet", "length_m": 0.4321, "confidence": 0.42, "closed": True, "poses": [{}] * 216},
+        ],
+        "warnings": ["no camera origin given: normals oriented toward +z", "a warning <b>escaped</b>"],
+    }
+    panel = png_pixels(make_drawing(points, paths, point_budget=2000), record)[:, VIEW_WIDTH:]
+    for text in ("Seams", "length mm", "confidence", "closed", "v_groove", "160.0", "81", "0.90", "no",
+                 "fillet", "432.1", "216", "0.42", "yes", "Warnings",
+                 "- no camera origin given: normals oriented toward +z", "- a warning <b>escaped</b>"):  # fmt: skip
+        assert panel_shows(panel, text), text
+    assert not panel_shows(panel, "none")
+    empty = png_pixels(make_drawing(points, paths, point_budget=2000), {**record, "warnings": []})[:, VIEW_WIDTH:]
+    assert panel_shows(empty, "none")
+
+
+def test_what_does_not_fit_in_the_png_says_where_it_is(plate_and_path):
+    points, paths, record = plate_and_path
+    seam = {"id": 1, "joint": "fillet", "length_m": 0.1, "confidence": 0.5, "closed": False, "poses": []}
+    record = {**record, "seams": [seam] * 60, "warnings": ["/a/path/without/any/space/" * 8] * 40}
+    panel = png_pixels(make_drawing(points, paths, point_budget=2000), record)[:, VIEW_WIDTH:]
+    assert panel_shows(panel, "more seam(s) in the HTML and the path JSON")
+    assert panel_shows(panel, "more line(s) in the HTML and the path JSON")

@@ -112,11 +112,13 @@ def _is_number(value) -> bool:
 def read_image(path: Path, width: int, height: int) -> np.ndarray:
     """A grey (H, W) uint8 image of the size the intrinsics say; InputError naming the file otherwise."""
     from weldseam.calibration.board import require_opencv
+    from weldseam.calibration.opencv_output import opencv_messages
     from weldseam.io.files import read_input
 
     cv2 = require_opencv()
     data = read_input(path, "an image")
-    image = cv2.imdecode(np.frombuffer(data, dtype=np.uint8), cv2.IMREAD_GRAYSCALE)
+    with opencv_messages():  # "PNG input buffer is incomplete": our one line below says it
+        image = cv2.imdecode(np.frombuffer(data, dtype=np.uint8), cv2.IMREAD_GRAYSCALE)
     if image is None:
         raise InputError(f"{path}: not a readable image (PNG, JPEG, BMP, TIFF)")
     if image.shape != (height, width):

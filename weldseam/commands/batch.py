@@ -19,13 +19,17 @@ EPILOG = (
     "Sidecars, next to each scan: NAME.intrinsics.json, else intrinsics.json, else the only\n"
     "*.intrinsics.json in the folder (depth images); NAME.pose.json, else pose.json (optional):\n"
     '{"T_base_camera": 4x4}, or the robot state {"flange_pose": [...]} / {"joints_rad": [...]} with --hand-eye.\n'
-    "Outputs: OUTDIR/NAME.json (or .csv), OUTDIR/summary.csv and summary.json. Scans whose\n"
+    "Outputs: OUTDIR/NAME.json (or .csv), OUTDIR/summary.csv and summary.json (one row per scan,\n"
+    "with its status, error and warnings). Scans whose\n"
     "output is up to date (same scan, sidecars and settings) are skipped unless --force.\n\n"
     "Exit codes:\n\n"
     "0: every scan planned\n\n"
     "1: some scans failed or had no seam (see the summary; the others are done)\n\n"
-    "2: usage error or unreadable input list / config\n\n"
-    "130: interrupted (outputs finished so far and the summary are kept)"
+    "2: usage error, unreadable input list / config, or an output folder that cannot be\n"
+    "written (said before any scan is planned)\n\n"
+    "129, 130, 143: stopped by SIGHUP, SIGINT (Ctrl-C) or SIGTERM, sent to this process or its\n"
+    "whole group: the workers stop within seconds, the outputs finished so far and the summary\n"
+    "are kept, no process is left"
 )
 
 
@@ -57,7 +61,8 @@ def batch(
 ) -> None:
     """Plan many scans: one path file per scan, a summary, failures never stop the others."""
     with reported():
-        from weldseam.batch import find_scans, make_jobs, run_batch
+        from weldseam.batch import find_scans, make_jobs, prepare_output_folder, run_batch
+        from weldseam.batch_workers import Interrupted, StopSignals
         from weldseam.config import config_to_dict, effective_config
         from weldseam.errors import InputError
         from weldseam.io.hand_eye import read_hand_eye
@@ -72,9 +77,7 @@ def batch(
         scans = find_scans(inputs)
         if not scans:
             raise InputError(f"no scans (.ply .pcd .xyz .txt .npy .png) in {' '.join(inputs)}")
-        if out_dir.exists() and not out_dir.is_dir():
-            raise InputError(f"{out_dir}: exists and is not a folder")
-        out_dir.mkdir(parents=True, exist_ok=True)
+        prepare_output_folder(out_dir)
         output_format = "json" if config.output.format == "auto" else config.output.format
         work = make_jobs(
             scans,
@@ -87,8 +90,18 @@ def batch(
             allow_empty=allow_empty,
             hand_eye=hand_eye,
         )
-        with _reporter(len(work), quiet) as on_result:
-            results = run_batch(work, out_dir, workers=workers, scheduler=scheduler, force=force, on_result=on_result)
+        progress = _reporter(len(work), quiet)
+        try:
+            with StopSignals() as stop, progress:
+                results = run_batch(
+                    work, out_dir, workers=workers, scheduler=scheduler, force=force, on_result=progress, stop=stop
+                )
+        except Interrupted as interrupt:
+            stderr(
+                f"Error: interrupted by {interrupt}: {progress.done} of {len(work)} scan(s) finished; "
+                f"their outputs and {out_dir / 'summary.csv'} are kept"
+            )
+            raise typer.Exit(128 + interrupt.signum) from None  # the shell's rule, as listed in EXIT_CODES
         failed = sum(result.failed for result in results)
         skipped = sum(result.status == "skipped" for result in results)
         stderr(
@@ -113,9 +126,9 @@ class _reporter:
             self.progress = Progress(console=Console(stderr=True))
             self.progress.start()
             self.task = self.progress.add_task("planning", total=self.total)
-        return self.report
+        return self
 
-    def report(self, result) -> None:
+    def __call__(self, result) -> None:
         self.done += 1
         if result.status == "ok":
             detail = f"{result.seams} seam(s), {result.length_m * 1000:.1f} mm, {result.seconds:.2f} s"

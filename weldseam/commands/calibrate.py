@@ -32,9 +32,12 @@ MANIFEST_HELP = (
     "tool0 (the flange, not a TCP: zero the TCP offset, or use get_actual_tool_flange_pose()) in the base frame "
     "at capture time (metres, rotation vector); joints_rad are the joint angles instead (forward kinematics).\n\n"
     "Output: eye-in-hand writes T_flange_camera (camera points -> tool0 frame), eye-to-hand T_base_camera "
-    "(camera points -> base frame), 4x4 row-major, metres, with the method and its residuals: the RMS scatter "
-    "of the fixed board pose over the captures (centre mm, rotation deg, corners mm). --method auto keeps the "
-    "method whose board corners scatter least."
+    "(camera points -> base frame), 4x4 row-major, metres, with the method and its residuals. "
+    "leave_one_out is the estimated error of the transform: it is solved again without each capture in turn, "
+    "and the spread of those answers (jackknife, mm and deg) tracks the true error (on 360 synthetic runs the "
+    "true error was below twice it in 97 % and below three times it in all). board_scatter is how much the fixed board pose scatters "
+    "over the captures (centre mm, rotation deg, corners mm): what the solver minimised, not an error estimate. "
+    "--method auto keeps the method whose board corners scatter least."
 )
 EPILOG = (
     "Example:\n\n"
@@ -43,8 +46,10 @@ EPILOG = (
     "  weldseam calibrate hand-eye calib/manifest.json -o hand_eye.json\n"
     "  weldseam calibrate hand-eye calib/manifest.json -o H.json --json > table.json\n\n"
     f"{MANIFEST_HELP}\n\n"
-    "Take 10-20 captures with the whole board in view, tilting the flange by 15-30 deg about different axes; "
-    "too few captures, or rotations all about one axis, are refused.\n\n"
+    "Take 10-20 captures with the whole board in view, tilting the flange by 15-30 deg about different axes. "
+    "Refused, before any image is read: fewer than 6 captures; captures whose flange orientations differ by "
+    "less than 10 deg, or turn about one axis only (all motion axes within 5 deg of one line); and a set that "
+    "breaks either rule once any one capture is left out (that capture could not be checked).\n\n"
     f"Exit codes:\n\n{EXIT_TABLE}"
 )
 calibrate_app = typer.Typer(
@@ -108,10 +113,11 @@ def hand_eye(
         elif not quiet:
             _print_table(result)
         if not quiet:
-            chosen = result.chosen.scatter
+            error, scatter = result.chosen.error, result.chosen.scatter
             stderr(
                 f"{'stdout' if output == '-' else output}: {result.setup}, {result.method}, {result.captures} "
-                f"captures; board scatter {chosen.translation_mm:.2f} mm / {chosen.rotation_deg:.3f} deg; "
+                f"captures; estimated error {error.translation_mm:.2f} mm / {error.rotation_deg:.3f} deg "
+                f"(leave-one-out); board scatter {scatter.translation_mm:.2f} mm / {scatter.rotation_deg:.3f} deg; "
                 f"reprojection <= {reprojection_px:.2f} px"
             )
 
@@ -132,6 +138,8 @@ def _table_rows(result) -> list[tuple[str, ...]]:
     return [
         (
             entry.method,
+            cell(entry.error.translation_mm, 3),
+            cell(entry.error.rotation_deg, 4),
             cell(entry.scatter.translation_mm, 3),
             cell(entry.scatter.rotation_deg, 4),
             cell(entry.scatter.corners_mm, 3),
@@ -142,7 +150,7 @@ def _table_rows(result) -> list[tuple[str, ...]]:
 
 
 def _table_dict(result, reprojection_px: float) -> dict:
-    """The residual table as JSON: every method's board scatter, the chosen one flagged."""
+    """The residual table as JSON: every method's leave-one-out error and board scatter, the chosen one flagged."""
     document = result.to_dict()
     return {
         "setup": result.setup,
@@ -157,21 +165,22 @@ def _table_dict(result, reprojection_px: float) -> dict:
 
 
 def _print_table(result) -> None:
-    """Each method's board scatter on stderr: a rich table on a terminal, aligned text otherwise."""
-    header = ("method", "centre mm", "rotation deg", "corners mm", "")
+    """Each method's leave-one-out error and board scatter on stderr: a rich table on a terminal, aligned text
+    otherwise."""
+    header = ("method", "error mm", "error deg", "scatter mm", "scatter deg", "corners mm", "")
     rows = _table_rows(result)
     if sys.stderr.isatty():
         from rich.console import Console
         from rich.table import Table
 
-        table = Table(title="board scatter over the captures (RMS)")
+        table = Table(title="estimated error (leave-one-out) and board scatter over the captures (RMS)")
         for k, name in enumerate(header):
-            table.add_column(name, justify="left" if k in (0, 4) else "right")
+            table.add_column(name, justify="left" if k in (0, 6) else "right")
         for row in rows:
             table.add_row(*row, style="bold" if row[-1] else None)
         Console(stderr=True).print(table)
         return
     widths = [max(len(header[k]), *(len(row[k]) for row in rows)) for k in range(len(header))]
     for row in (header, *rows):
-        stderr("  ".join(cell.ljust(width) if k in (0, 4) else cell.rjust(width)
+        stderr("  ".join(cell.ljust(width) if k in (0, 6) else cell.rjust(width)
                          for k, (cell, width) in enumerate(zip(row, widths))).rstrip())  # fmt: skip

@@ -27,7 +27,9 @@ EXIT_CODES = (
     (5, "robot fault (the robot was stopped)"),
     (6, "could not connect to the robot (nothing moved)"),
     (70, "internal error (a bug: please report it with the input)"),
+    (129, "hung up (SIGHUP; batch stops its workers and keeps what finished)"),
     (130, "interrupted (Ctrl-C)"),
+    (143, "terminated (SIGTERM; batch stops its workers and keeps what finished)"),
 )
 EXIT_ROBOT_FAULT = 5
 EXIT_FOR = (

@@ -39,4 +39,4 @@ def write_report(
     if html_path is not None:
         atomic_write(html_path, report_html(drawing, record, title).encode("utf-8"))
     if png_path is not None:
-        atomic_write(png_path, report_png(drawing, title))
+        atomic_write(png_path, report_png(drawing, record, title))

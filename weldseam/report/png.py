@@ -1,15 +1,24 @@
-"""A static PNG of the report's view, drawn with Pillow (no browser): the scan as depth-sorted
-splats coloured like the HTML, the paths, torch arrows and start/end marks on top."""
+"""A static PNG of the report, drawn with Pillow (no browser): on the left the view, the scan as
+depth-sorted splats coloured like the HTML, the paths, torch arrows and start/end marks on top;
+on the right the HTML's panel of seams (id, joint, length, poses, confidence, closed) and
+warnings. Timings and parameters are in the HTML and the path JSON."""
 
 from __future__ import annotations
 
+import functools
 import io
 
 import numpy as np
 
 from weldseam.report.figure import Drawing, colours
 
-WIDTH, HEIGHT, MARGIN = 1200, 800, 40
+VIEW_WIDTH, PANEL_WIDTH, HEIGHT, MARGIN = 1200, 460, 800, 40
+WIDTH = VIEW_WIDTH + PANEL_WIDTH
+FONT_SIZE_PX, LINE_PX = 14, 20
+PANEL_RGB, TEXT_RGB = (255, 255, 255), (0, 0, 0)
+# The seam table: heading, right edge of the column in the panel (px; the first is left-aligned at 0).
+SEAM_COLUMNS = (("id", 24), ("joint", 0), ("length mm", 230), ("poses", 290), ("confidence", 375), ("closed", 430))
+JOINT_LEFT_PX = 40
 ELEVATION_DEG, AZIMUTH_DEG = 40.0, -60.0
 PATH_RGB = ((230, 25, 75), (245, 130, 49), (255, 0, 255), (255, 69, 0), (220, 20, 60), (255, 105, 180))
 
@@ -33,18 +42,26 @@ class _Projection:
         screen = points @ self.axes[:2].T if len(points) else np.zeros((1, 2))
         low, high = np.percentile(screen, 0.5, axis=0), np.percentile(screen, 99.5, axis=0)  # stray points may fall off
         self.scale = min(
-            (WIDTH - 2 * MARGIN) / max(high[0] - low[0], 1e-9), (HEIGHT - 2 * MARGIN) / max(high[1] - low[1], 1e-9)
+            (VIEW_WIDTH - 2 * MARGIN) / max(high[0] - low[0], 1e-9), (HEIGHT - 2 * MARGIN) / max(high[1] - low[1], 1e-9)
         )
         self.centre = (low + high) / 2
 
     def __call__(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         screen = (points @ self.axes[:2].T - self.centre) * self.scale
-        pixels = np.column_stack([WIDTH / 2 + screen[:, 0], HEIGHT / 2 - screen[:, 1]])
+        pixels = np.column_stack([VIEW_WIDTH / 2 + screen[:, 0], HEIGHT / 2 - screen[:, 1]])
         return pixels, points @ self.axes[2]
 
 
-def report_png(drawing: Drawing, title: str) -> bytes:
-    """The picture as PNG bytes."""
+@functools.lru_cache(maxsize=1)
+def font():
+    """Pillow's own font (no system font needed, so every machine draws the same pixels)."""
+    from PIL import ImageFont
+
+    return ImageFont.load_default(size=FONT_SIZE_PX)
+
+
+def report_png(drawing: Drawing, record: dict, title: str) -> bytes:
+    """The picture as PNG bytes; `record` is the path JSON document (its seams and warnings)."""
     from PIL import Image, ImageDraw
 
     everything = (
@@ -59,7 +76,7 @@ def report_png(drawing: Drawing, title: str) -> bytes:
         for dx in (0, 1):
             for dy in (0, 1):
                 x, y = xy[:, 0] + dx, xy[:, 1] + dy
-                inside = (x >= 0) & (x < WIDTH) & (y >= 0) & (y < HEIGHT)
+                inside = (x >= 0) & (x < VIEW_WIDTH) & (y >= 0) & (y < HEIGHT)
                 canvas[y[inside], x[inside]] = rgb[inside]
     image = Image.fromarray(canvas)
     draw = ImageDraw.Draw(image)
@@ -80,7 +97,7 @@ def report_png(drawing: Drawing, title: str) -> bytes:
             draw.rectangle([x - 5, y - 5, x + 5, y + 5], fill=fill, outline=(0, 0, 0))
             draw.text((x + 8, y - 14), f"{seam.seam_id} {name}", fill=(0, 0, 0))
         legend.append((seam.label, colour))
-    draw.text((MARGIN, 10), title, fill=(0, 0, 0))
+    draw.text((MARGIN, 10), title, fill=TEXT_RGB, font=font())
     top = HEIGHT - MARGIN - 16 * len(legend) - 4
     draw.rectangle(
         [MARGIN - 4, top, MARGIN + 24 + 7 * max(len(text) for text, _ in legend), HEIGHT - MARGIN + 4],
@@ -90,6 +107,89 @@ def report_png(drawing: Drawing, title: str) -> bytes:
         y = HEIGHT - MARGIN - 16 * (len(legend) - row)
         draw.rectangle([MARGIN, y + 2, MARGIN + 18, y + 10], fill=colour)
         draw.text((MARGIN + 24, y), text, fill=(0, 0, 0))
+    _draw_panel(draw, record)
     buffer = io.BytesIO()
     image.save(buffer, format="PNG")
     return buffer.getvalue()
+
+
+def _draw_panel(draw, record: dict) -> None:
+    """The seam table and the warnings in the panel right of the view; what does not fit is
+    counted in a last line that says where the rest is."""
+    left, right = VIEW_WIDTH + 16, WIDTH - 16
+    draw.rectangle([VIEW_WIDTH, 0, WIDTH, HEIGHT], fill=PANEL_RGB)
+    draw.line([VIEW_WIDTH, 0, VIEW_WIDTH, HEIGHT], fill=(200, 200, 200))
+    bottom = HEIGHT - MARGIN
+    y = MARGIN
+    draw.text((left, y), "Seams", fill=TEXT_RGB, font=font())
+    y += LINE_PX
+    seams = record.get("seams", [])
+    rows = [tuple(name for name, _ in SEAM_COLUMNS)] + [_seam_cells(seam) for seam in seams]
+    # Leave room for the warnings heading and at least one warning line below the table.
+    shown = _fitting(len(rows), (bottom - y) // LINE_PX - 3)
+    for row in rows[:shown]:
+        _draw_row(draw, left, y, row)
+        y += LINE_PX
+    if not seams:
+        draw.text((left, y), "no seam found", fill=TEXT_RGB, font=font())
+        y += LINE_PX
+    elif shown < len(rows):
+        draw.text((left, y), f"... {len(rows) - shown} more seam(s) in the HTML and the path JSON", fill=TEXT_RGB,
+                  font=font())  # fmt: skip
+        y += LINE_PX
+    y += LINE_PX // 2
+    draw.text((left, y), "Warnings", fill=TEXT_RGB, font=font())
+    y += LINE_PX
+    lines = [line for warning in record.get("warnings", []) for line in _wrapped(f"- {warning}", right - left)]
+    lines = lines or ["none"]
+    shown = _fitting(len(lines), (bottom - y) // LINE_PX)
+    for line in lines[:shown]:
+        draw.text((left, y), line, fill=TEXT_RGB, font=font())
+        y += LINE_PX
+    if shown < len(lines):
+        draw.text((left, y), f"... {len(lines) - shown} more line(s) in the HTML and the path JSON", fill=TEXT_RGB,
+                  font=font())  # fmt: skip
+
+
+def _fitting(count: int, room: int) -> int:
+    """How many of `count` lines to draw in `room` lines: all, or room - 1 and a line saying how many are left."""
+    return count if count <= room else max(room - 1, 0)
+
+
+def _seam_cells(seam: dict) -> tuple[str, ...]:
+    return (
+        str(seam.get("id")),
+        str(seam.get("joint")),
+        f"{seam.get('length_m', 0) * 1000:.1f}",
+        str(len(seam.get("poses", []))),
+        f"{seam.get('confidence', 0):.2f}",
+        "yes" if seam.get("closed") else "no",
+    )
+
+
+def _draw_row(draw, left: int, y: int, cells: tuple[str, ...]) -> None:
+    """One table row: the joint left-aligned, the other cells right-aligned on their column's edge."""
+    for (name, edge), cell in zip(SEAM_COLUMNS, cells):
+        if name == "joint":
+            draw.text((left + JOINT_LEFT_PX, y), cell, fill=TEXT_RGB, font=font())
+        else:
+            draw.text((left + edge - round(draw.textlength(cell, font=font())), y), cell, fill=TEXT_RGB, font=font())
+
+
+def _wrapped(text: str, width_px: int) -> list[str]:
+    """`text` in lines no wider than width_px, broken between words, and inside a word too long for a line
+    (a file path); the lines after the first are indented."""
+    lines, line = [], ""
+    for word in text.split():
+        candidate = f"{line} {word}" if line else word
+        if font().getlength(candidate) <= width_px:
+            line = candidate
+            continue
+        if line:
+            lines.append(line)
+        line = f"  {word}"
+        while font().getlength(line) > width_px:
+            cut = max(k for k in range(4, len(line)) if font().getlength(line[:k]) <= width_px)
+            lines.append(line[:cut])
+            line = f"  {line[cut:]}"
+    return [*lines, line]
