@@ -148,11 +148,12 @@ def _clamp(heights: _HeightMap, seams, target_xy, rng):
     probe = target_xy + radii[:, None] * [np.cos(heading), np.sin(heading)]
     index = np.clip(np.rint((probe - heights.centre_xy + GRID_HALF_SIZE_M) / GRID_STEP_M).astype(int),
                     0, len(heights.grid) - 1)
-    above = heights.heights[index[:, 1], index[:, 0]] > 0.001
-    if not above.any():
+    above = np.nonzero(heights.heights[index[:, 1], index[:, 0]] > 0.001)[0]
+    if len(above) == 0:
         return None
-    edge = radii[np.nonzero(above)[0].max()]
-    top = heights.heights[tuple(np.flip(index[np.nonzero(above)[0].max() - 6]))]
+    edge = radii[above.max()]
+    row, col = index[max(above.max() - 6, 0)][::-1]  # 3 mm inside the edge
+    top = heights.heights[row, col]
     across = (-width / 2, width / 2)
     arm = (edge - reach, edge + gap + post)
     margin = 1.5 * GRID_STEP_M
@@ -160,12 +161,11 @@ def _clamp(heights: _HeightMap, seams, target_xy, rng):
                               (across[0] - margin, across[1] + margin))
     post_cells = heights.cells(target_xy, heading, (edge + gap - margin, arm[1] + margin),
                                (across[0] - margin, across[1] + margin))
-    h = heights.heights
-    on_top = arm_cells & (np.abs(h - top) <= FLAT_TOLERANCE_M)
-    on_table = np.abs(h) <= FLAT_TOLERANCE_M
-    if not (np.all(on_top | (arm_cells & on_table) | ~arm_cells) and np.all(on_table[post_cells])
-            and not heights.occupied[arm_cells].any()
-            and on_top.sum() >= 0.3 * arm_cells.sum() and top > 0.002
+    on_top = arm_cells & (np.abs(heights.heights - top) <= FLAT_TOLERANCE_M)
+    on_table = np.abs(heights.heights) <= FLAT_TOLERANCE_M
+    arm_rests = np.all((on_top | on_table)[arm_cells]) and on_top.sum() >= 0.3 * arm_cells.sum()
+    post_stands = np.all(on_table[post_cells])
+    if not (top > 0.002 and arm_rests and post_stands and not heights.occupied[arm_cells].any()
             and _clear_of_seams(seams, target_xy, heading, arm, across, top + thickness)):
         return None
     meshes = [
