@@ -11,10 +11,14 @@ def format_table(header: list[str], rows: list[list[str]]) -> str:
     return "\n".join(lines)
 
 
-def selected_families(parser, text: str, known) -> list[str]:
-    """The comma-separated family names in `text`; a parser error naming unknown ones."""
-    families = text.split(",")
+def selected_families(parser, text: str, known, groups=None) -> list[str]:
+    """The comma-separated family names in `text`, each group name (a key of `groups`)
+    replaced by its families, in order, without repeats; a parser error naming unknown ones."""
+    groups = groups or {}
+    families = []
+    for name in text.split(","):
+        families += [f for f in groups.get(name, (name,)) if f not in families]
     unknown = sorted(set(families) - set(known))
     if unknown:
-        parser.error(f"unknown families {unknown}; known: {', '.join(known)}")
+        parser.error(f"unknown families {unknown}; known: {', '.join([*groups, *known])}")
     return families

@@ -8,7 +8,9 @@ precision. Units: metres and radians; base frame z up, table top at z = 0.
 Ground truth. V-groove: the seam point is the centre of the groove opening at the plate
 surface (midpoint of the two top edges, in the air above the groove) and the torch axis is
 the negated surface normal. Fillet (inside corner): the seam point is on the corner line and
-the torch axis bisects the two faces' inward directions.
+the torch axis bisects the two faces' inward directions. The further joints (lap, bevel,
+square butt, outside corner, pipe on plate, saddle, tacks, clutter, curved valley) are in
+joints.py, pipes.py and valley.py; catalog.py lists every family and draws a case.
 """
 
 from __future__ import annotations
@@ -30,6 +32,15 @@ TABLE_EXTENTS_M = (0.8, 0.8, 0.03)
 UP = np.array([0.0, 0.0, 1.0])
 
 
+class Tack(NamedTuple):
+    """A tack weld on a seam: its centre on the seam line (3,) m, its length along the seam
+    and its height above the surface (m)."""
+
+    centre_m: np.ndarray
+    length_m: float
+    height_m: float
+
+
 @dataclass(frozen=True, eq=False)
 class TruthSeam:
     """Ground-truth seam.
@@ -37,7 +48,10 @@ class TruthSeam:
     points_m: (M, 3) base-frame points every ~0.5 mm along the seam, in travel order.
     torch_axes: (M, 3) unit torch axes pointing INTO the work.
     closed: the seam is a loop (the last point joins the first).
-    joint: "v_groove" or "fillet".
+    joint: the kind, as the planner names it: "v_groove", "bevel", "square_butt",
+        "fillet" (inside corners, ring fillets and saddles included), "lap",
+        "outside_corner".
+    tacks: the tack welds on this seam (part of the seam: the path runs across them).
     Holds arrays, so equality is identity.
     """
 
@@ -45,16 +59,21 @@ class TruthSeam:
     torch_axes: np.ndarray
     closed: bool
     joint: str
+    tacks: tuple[Tack, ...] = ()
 
 
 @dataclass(frozen=True, eq=False)
 class SyntheticScene:
     """A workpiece on the table, its truth seams and where a camera should look.
 
-    mesh: the whole scene (table included), base frame.
+    mesh: the whole scene (table, parts and fixtures), base frame.
     camera_target_m: (3,) point for the camera to look at.
     view_axis_m: (3,) unit direction from the target toward a good camera position;
         `default_camera` tilts it by up to `max_view_tilt_deg` (degrees).
+    parts: the workpiece's solids; fixtures: supports, clamps and loose bars (never a
+        seam), each a closed mesh in the base frame.
+    occluder: the mesh that can hide a truth point (None: `mesh`). Tacked seams leave
+        their tacks out: a tack is part of its seam, so the seam under it counts as seen.
     """
 
     name: str
@@ -63,6 +82,9 @@ class SyntheticScene:
     camera_target_m: np.ndarray
     view_axis_m: np.ndarray = field(default_factory=lambda: UP.copy())
     max_view_tilt_deg: float = 30.0
+    parts: tuple[trimesh.Trimesh, ...] = ()
+    fixtures: tuple[trimesh.Trimesh, ...] = ()
+    occluder: trimesh.Trimesh | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -168,14 +190,17 @@ def _swept_solid(origins, across, up, offsets_m, heights_m, base_m, closed) -> t
 
     The section is {(t, h): offsets_m[0] <= t <= offsets_m[-1], base_m <= h <= height(t)},
     height piecewise linear through (offsets_m, heights_m) (J,). Section i puts (t, h) at
-    origins[i] + t across[i] + h up[i]; origins, across, up are (I, 3). closed: the last
-    section joins the first (a ring); otherwise both ends are capped.
+    origins[i] + t across[i] + h up[i]; origins, across, up are (I, 3). base_m is a number
+    or (I, J), a base height per section and offset (a bottom that follows a curved
+    surface). closed: the last section joins the first (a ring); otherwise both ends are
+    capped.
     """
     offsets = np.asarray(offsets_m, float)[None, :, None]
     heights = np.asarray(heights_m, float)[None, :, None]
     origins, across, up = (np.asarray(a, float)[:, None, :] for a in (origins, across, up))
     top = origins + offsets * across + heights * up
-    bottom = origins + offsets * across + base_m * up
+    base = np.asarray(base_m, float)
+    bottom = origins + offsets * across + (base[..., None] if base.ndim else base) * up
     count, width = top.shape[:2]
     index = np.arange(2 * count * width).reshape(2, count, width)
     this = np.arange(count if closed else count - 1)
@@ -230,7 +255,9 @@ def _moved(matrix: np.ndarray, meshes, seams):
     meshes = [mesh.copy().apply_transform(matrix) for mesh in meshes]
     seams = [
         TruthSeam(transform_points(matrix, s.points_m), s.torch_axes @ matrix[:3, :3].T,
-                  s.closed, s.joint)
+                  s.closed, s.joint,
+                  tuple(t._replace(centre_m=transform_points(matrix, t.centre_m[None])[0])
+                        for t in s.tacks))
         for s in seams
     ]
     return meshes, seams
@@ -241,22 +268,37 @@ def _rotation(axis, angle_rad: float) -> np.ndarray:
     return trimesh.transformations.rotation_matrix(angle_rad, np.asarray(axis, float))
 
 
-def _scene(name, parts, seams, target, yaw_rad, view_axis=UP, max_view_tilt_deg=30.0):
-    """SyntheticScene: workpiece `parts` and truth turned by `yaw_rad` about the base z axis,
-    set on the table."""
-    turn = _rotation(UP, yaw_rad)
-    parts, seams = _moved(turn, parts, seams)
-    table = _box(
+def _table() -> trimesh.Trimesh:
+    """The table: a slab whose top is z = 0."""
+    return _box(
         [-TABLE_EXTENTS_M[0] / 2, -TABLE_EXTENTS_M[1] / 2, -TABLE_EXTENTS_M[2]],
         [TABLE_EXTENTS_M[0] / 2, TABLE_EXTENTS_M[1] / 2, 0.0],
     )
+
+
+def _scene(name, parts, seams, target, yaw_rad, view_axis=UP, max_view_tilt_deg=30.0,
+           fixtures=(), hidden=()):
+    """SyntheticScene: workpiece `parts`, `fixtures` and truth turned by `yaw_rad` about the
+    base z axis, set on the table. `hidden`: indices of parts that hide no truth (tacks)."""
+    turn = _rotation(UP, yaw_rad)
+    parts, seams = _moved(turn, parts, seams)
+    fixtures, _ = _moved(turn, fixtures, [])
+    table = _table()
+    occluder = None
+    if hidden:
+        occluder = trimesh.util.concatenate(
+            [table, *(p for k, p in enumerate(parts) if k not in hidden), *fixtures]
+        )
     return SyntheticScene(
         name=name,
-        mesh=trimesh.util.concatenate([table, *parts]),
+        mesh=trimesh.util.concatenate([table, *parts, *fixtures]),
         seams=tuple(seams),
         camera_target_m=transform_points(turn, np.asarray(target, float)[None])[0],
         view_axis_m=unit(turn[:3, :3] @ np.asarray(view_axis, float)),
         max_view_tilt_deg=max_view_tilt_deg,
+        parts=tuple(parts),
+        fixtures=tuple(fixtures),
+        occluder=occluder,
     )
 
 
@@ -332,7 +374,8 @@ def inclined_plates(
     corners = transform_points(lift, corners)
     support = trimesh.convex.convex_hull(np.vstack([corners, corners * [1, 1, 0]]))
     target = seam.points_m[len(seam.points_m) // 2]
-    return _scene("inclined_plates", [*plates, support], [seam], target, _yaw(rng, yaw_deg))
+    return _scene("inclined_plates", plates, [seam], target, _yaw(rng, yaw_deg),
+                  fixtures=[support])
 
 
 def _curve_section_frames(points_xy: np.ndarray):
@@ -634,9 +677,9 @@ def visible_mask(
     max_view_angle_deg: float = 70.0,
 ) -> np.ndarray:
     """(M,) bool: truth points the camera observes. A point counts when it projects into the
-    image, the ray from the camera to it hits nothing more than `occlusion_tolerance_m`
-    before it (V-groove points are in the air: the ray is cast to them), and the ray is
-    within `max_view_angle_deg` of the torch axis."""
+    image, the ray from the camera to it hits nothing (of scene.occluder, else scene.mesh)
+    more than `occlusion_tolerance_m` before it (V-groove points are in the air: the ray is
+    cast to them), and the ray is within `max_view_angle_deg` of the torch axis."""
     camera = T_base_camera[:3, 3]
     local = transform_points(np.linalg.inv(T_base_camera), seam.points_m)
     depth = local[:, 2]
@@ -649,7 +692,8 @@ def visible_mask(
     rays = seam.points_m - camera
     distance = np.linalg.norm(rays, axis=1)
     directions = rays / distance[:, None]
-    t_hit, _ = cast_rays(scene.mesh, camera, directions)
+    t_hit, _ = cast_rays(scene.mesh if scene.occluder is None else scene.occluder, camera,
+                         directions)
     unoccluded = t_hit >= distance - occlusion_tolerance_m
     facing = np.sum(directions * seam.torch_axes, axis=1) > np.cos(np.radians(max_view_angle_deg))
     return in_image & unoccluded & facing
