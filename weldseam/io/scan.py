@@ -19,6 +19,7 @@ from weldseam.types import Scan
 UNIT_SCALE = {"m": 1.0, "mm": 0.001}
 LARGEST_PLAUSIBLE_EXTENT_M = 10.0
 SMALLEST_PLAUSIBLE_EXTENT_M = 0.01
+FRAME_KEYS = ("scan", "intrinsics", "pose")  # a manifest frame's keys besides an inline pose
 
 
 def load_scan(
@@ -121,10 +122,15 @@ def read_frames_manifest(path: str | Path) -> tuple[list[FrameSpec], str | None]
         inline = [key for key in POSE_KEYS if key in frame]
         if "pose" in frame and inline:
             raise InputError(f'{path}: {where} has both "pose" and {inline[0]}: give one')
+        if "pose" in frame or not inline:
+            unknown = sorted(set(frame) - set(FRAME_KEYS))
+            if unknown:
+                allowed = ", ".join(f'"{key}"' for key in FRAME_KEYS)
+                raise InputError(f'{path}: {where}: unknown key "{unknown[0]}" (allowed: {allowed}, or a pose inline)')
         if "pose" in frame:
             pose = read_pose_file(relative(frame["pose"], f"{where}.pose"))
         else:
-            pose = pose_from_json(frame, f"{path}: {where}") if inline else None
+            pose = pose_from_json(frame, f"{path}: {where}", other_keys=FRAME_KEYS) if inline else None
         frames.append(FrameSpec(relative(frame["scan"], f"{where}.scan"), intrinsics, pose))
     return frames, hand_eye
 
