@@ -71,3 +71,27 @@ def test_plan_with_the_config_of_its_own_output_reproduces_it(groove_ply, tmp_pa
     a, b = json.loads(first.read_text()), json.loads(second.read_text())
     assert a["params"]["pairing"]["max_width_m"] == 0.05
     assert a["params"] == b["params"] and a["seams"] == b["seams"]
+
+
+def _memory_cap():
+    """At most 2 GB of address space, so that a regression fails fast instead of swapping."""
+    import resource
+
+    resource.setrlimit(resource.RLIMIT_AS, (2 << 30, 2 << 30))
+
+
+def test_a_working_voxel_finer_than_the_fine_voxel_is_refused_before_the_scan_is_read(groove_ply, tmp_path):
+    result = subprocess.run(
+        [sys.executable, "-m", "weldseam.cli", "plan", str(groove_ply), "--camera-origin", CAMERA,
+         "--set", "condition.working_voxel_m=0.0001", "-o", str(tmp_path / "p.json")],
+        capture_output=True, timeout=120, preexec_fn=_memory_cap,
+    )
+    assert result.returncode == 2 and result.stdout == b""
+    assert result.stderr.decode() == (
+        "Error: condition.working_voxel_m 0.0001 is below condition.voxel_m 0.001: the working cloud coarsens the "
+        "fine one, so its voxel must be at least as large\n"
+    )
+    assert not (tmp_path / "p.json").exists()
+    both = weldseam("config", "show", "--set", "condition.voxel_m=0.0001", "--set", "condition.working_voxel_m=0.0001")
+    assert both.returncode == 2
+    assert both.stderr.decode().startswith("Error: smooth.radius_m 0.006 spans 60 working voxels")
