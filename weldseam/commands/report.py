@@ -39,7 +39,7 @@ def report(
         from weldseam.errors import InputError
         from weldseam.io.files import read_input
         from weldseam.io.paths import read_paths
-        from weldseam.io.scan import load_scan
+        from weldseam.io.placement import PlacementOptions, place_scans
         from weldseam.report import write_report
         from weldseam.report.overlay import scan_overlay
 
@@ -53,9 +53,9 @@ def report(
         if not path_file.lower().endswith(".json"):
             raise InputError(f"{path_file}: the report needs the path JSON (it holds the run's record)")
         record = json.loads(read_input(path_file, "a path file"))
-        loaded, _ = load_scan(
-            scan, intrinsics_path=intrinsics, camera_pose_path=camera_pose, cloud_frame=cloud_frame, units=units
-        )
+        loaded = place_scans(PlacementOptions(
+            (scan,), intrinsics=intrinsics, camera_pose=camera_pose, cloud_frame=cloud_frame, units=units
+        )).frames[0]
         overlay = scan_overlay(loaded, effective_config(path_file, {}))
         points, values = (overlay.working_m, overlay.descriptor) if color == "descriptor" else (loaded.points_m, None)
         write_report(

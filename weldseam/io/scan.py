@@ -13,8 +13,8 @@ from weldseam.geometry import column_bounds, finite_rows, transform_points
 from weldseam.io.clouds import read_cloud
 from weldseam.io.depth import backproject_depth, read_depth_png, read_intrinsics
 from weldseam.io.files import read_json
-from weldseam.io.poses import POSE_KEYS, FramePose, pose_from_json, read_camera_pose, read_pose_file
-from weldseam.types import Scan
+from weldseam.io.poses import POSE_KEYS, FramePose, pose_from_json, read_pose_file
+from weldseam.types import FRAMES, Intrinsics, Scan
 
 UNIT_SCALE = {"m": 1.0, "mm": 0.001}
 LARGEST_PLAUSIBLE_EXTENT_M = 10.0
@@ -26,7 +26,7 @@ def load_scan(
     source: str,
     *,
     intrinsics_path: str | None = None,
-    camera_pose_path: str | None = None,
+    intrinsics: Intrinsics | None = None,
     T_base_camera: np.ndarray | None = None,
     cloud_frame: str = "base",
     camera_origin_m: np.ndarray | None = None,
@@ -34,29 +34,31 @@ def load_scan(
     stdin=None,
 ) -> tuple[Scan, list[str]]:
     """Read `source` (cloud file, `-` for a PLY on stdin, or a 16-bit depth PNG with
-    `intrinsics_path`) and return it in the base frame with any notes for the user.
+    `intrinsics_path` or `intrinsics`) and return it with any notes for the user.
 
     A depth image, and a cloud with `cloud_frame="camera"`, are in the camera frame and are
-    mapped to the base frame by `T_base_camera` (4, 4), or the one of `camera_pose_path`
-    (identity when neither is given). The camera origin (to orient normals) is
+    mapped to the base frame by `T_base_camera` (4, 4); without it they stay in the camera
+    frame (Scan.frame "camera", said in a note). The camera origin (to orient normals) is
     `camera_origin_m` if given, else the pose's translation, else the camera frame's origin
     for camera-frame data, else unknown.
     """
     notes: list[str] = []
     if units not in UNIT_SCALE:
         raise InputError(f"--units must be m or mm, got {units!r}")
-    if cloud_frame not in ("base", "camera"):
+    if cloud_frame not in FRAMES:
         raise InputError(f"--cloud-frame must be base or camera, got {cloud_frame!r}")
-    pose = read_camera_pose(camera_pose_path) if camera_pose_path else T_base_camera
+    pose = T_base_camera
     is_depth = source != "-" and Path(source).suffix.lower() == ".png"
     if is_depth:
-        if intrinsics_path is None:
+        if intrinsics is None and intrinsics_path is None:
             raise InputError(f"{source}: a depth image needs --intrinsics FILE.json")
-        intrinsics = read_intrinsics(intrinsics_path)
+        if intrinsics is None:
+            intrinsics = read_intrinsics(intrinsics_path)
+        described = intrinsics_path or "the intrinsics"
         depth = read_depth_png(source)
         if depth.shape != (intrinsics.height, intrinsics.width):
             raise InputError(
-                f"{source}: image is {depth.shape[1]}x{depth.shape[0]} but {intrinsics_path} says "
+                f"{source}: image is {depth.shape[1]}x{depth.shape[0]} but {described} says "
                 f"{intrinsics.width}x{intrinsics.height}"
             )
         points = backproject_depth(depth, intrinsics)
@@ -65,7 +67,7 @@ def load_scan(
         sha256 = hashlib.sha256(Path(source).read_bytes()).hexdigest()
         in_camera_frame = True
     else:
-        if intrinsics_path is not None:
+        if intrinsics_path is not None or intrinsics is not None:
             raise InputError(f"{source}: --intrinsics applies to depth images (.png) only")
         points, sha256 = read_cloud(source, stdin=stdin)
         points = points * UNIT_SCALE[units]
@@ -79,10 +81,13 @@ def load_scan(
         origin = pose[:3, 3].copy()
     elif in_camera_frame:
         origin = np.zeros(3)
-        notes.append(f"{source}: no --camera-pose: the base frame is the camera frame")
     else:
         origin = None
-    return Scan(points_m=points, camera_origin_m=origin, source=source, sha256=sha256), notes
+    frame = "camera" if in_camera_frame and pose is None else "base"
+    if frame == "camera":
+        notes.append(f"{source}: no camera pose: the scan and the path are in the camera frame, not the robot base")
+    scan = Scan(points_m=points, camera_origin_m=origin, source=source, sha256=sha256, frame=frame)
+    return scan, notes
 
 
 @dataclass(frozen=True, eq=False)
