@@ -193,3 +193,60 @@ def test_crop_box_keeps_the_seam_inside_it(groove_ply, tmp_path):
     bad = weldseam("plan", groove_ply, "--crop=0.1,0,0,0,1,1", "-o", tmp_path / "bad.csv")
     assert bad.returncode == 2
     one_error_line(bad, "--crop")
+
+
+@pytest.fixture(scope="module")
+def flat_plate(tmp_path_factory):
+    """A plate with no seam: planning it ends in exit 3 only after the whole pipeline has run."""
+    rng = np.random.default_rng(3)
+    grid = np.stack(np.meshgrid(np.arange(0, 0.2, 0.0008), np.arange(0, 0.15, 0.0008)), -1).reshape(-1, 2)
+    plate = tmp_path_factory.mktemp("plate") / "plate.npy"
+    np.save(plate, np.column_stack([grid, rng.normal(0, 0.0003, len(grid))]))
+    return plate
+
+
+def _unwritable_folder():
+    """/sys refuses new files even to root (chmod does not stop root)."""
+    import os
+    import secrets
+    from pathlib import Path
+
+    folder = Path("/sys")
+    probe = folder / f"weldseam-{secrets.token_hex(4)}"
+    try:
+        os.close(os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL))
+    except OSError:
+        return folder
+    probe.unlink()
+    pytest.skip("no unwritable folder here")
+
+
+@pytest.mark.parametrize("option, target, fragment", [
+    ("-o", "missing/path.json", "the folder {tmp}/missing does not exist"),
+    ("-o", "file.txt/path.json", "{tmp}/file.txt is a file, not a folder"),
+    ("-o", "path.txt", "unknown path file format '.txt'"),
+    ("-o", "out.json", "{tmp}/out.json: is a folder, not a file name"),
+    ("--report", "missing/r.html", "the folder {tmp}/missing does not exist"),
+    ("--dump-stages", "file.txt", "{tmp}/file.txt: is a file, not a folder"),
+    ("--dump-stages", "file.txt/dump", "cannot create the folder"),
+])
+def test_a_bad_output_is_one_line_exit_2_before_the_pipeline_runs(flat_plate, tmp_path, option, target, fragment):
+    (tmp_path / "file.txt").write_text("not a folder")
+    (tmp_path / "out.json").mkdir()
+    extra = [] if option == "-o" else ["-o", tmp_path / "p.json"]
+    result = weldseam("plan", flat_plate, "--camera-origin", "0.1,0.07,0.45", option, tmp_path / target, *extra)
+    assert result.returncode == 2  # not 3: the plate's "no seam" would come after the whole pipeline
+    one_error_line(result, fragment.format(tmp=tmp_path))
+    assert sorted(path.name for path in tmp_path.iterdir()) == ["file.txt", "out.json"]
+
+
+@pytest.mark.parametrize("option", ["-o", "--report", "--dump-stages"])
+def test_an_unwritable_folder_is_one_line_exit_2_before_the_pipeline_runs(flat_plate, tmp_path, option):
+    folder = _unwritable_folder()
+    target = folder / ("dump" if option == "--dump-stages" else "out.json" if option == "-o" else "r.html")
+    extra = [] if option == "-o" else ["-o", tmp_path / "p.json"]
+    result = weldseam("plan", flat_plate, "--camera-origin", "0.1,0.07,0.45", option, target, *extra)
+    assert result.returncode == 2
+    line = one_error_line(result, str(target))
+    assert "cannot" in line and "Traceback" not in result.stderr.decode()
+    assert not (tmp_path / "p.json").exists()

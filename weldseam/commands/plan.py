@@ -102,6 +102,7 @@ def plan(
     """Find the weld seams in a scan and write the ordered torch path."""
     with reported():
         from weldseam.config import effective_config
+        from weldseam.io.atomic import check_writable, prepare_folder
         from weldseam.io.clouds import write_ply
         from weldseam.io.paths import path_format, write_paths
         from weldseam.io.placement import PlacementOptions, place_scans, read_recorded, with_placement
@@ -121,11 +122,16 @@ def plan(
                 raise InputError(f"--crop: each lower corner value must be below the upper one, got {crop}")
             overrides.setdefault("condition", {}).update(crop_min_m=box[:3].tolist(), crop_max_m=box[3:].tolist())
         config = effective_config(config_file, overrides)
+        # Every output is checked before any work: a bad name must not cost a whole run.
         path_fmt = path_format(output, None if config.output.format == "auto" else config.output.format)
-        if report is not None and not report.lower().endswith((".html", ".png")):
-            raise InputError(f"--report {report}: the report is a .html or a .png file")
+        if output != "-":
+            check_writable(output)
+        if report is not None:
+            if not report.lower().endswith((".html", ".png")):
+                raise InputError(f"--report {report}: the report is a .html or a .png file")
+            check_writable(report)
         if dump_stages is not None:
-            dump_stages.mkdir(parents=True, exist_ok=True)
+            prepare_folder(dump_stages)
         started = time.perf_counter()
         placement = PlacementOptions(
             tuple(scans or ()), frames, intrinsics, camera_pose, flange_pose, joints, hand_eye, robot,
