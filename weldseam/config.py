@@ -138,6 +138,26 @@ class ResampleConfig:
     smoothing_m: float = _param(0.003, "Gaussian sigma (arc length) that smooths seam points before resampling")
 
 
+DIRECTION_RULES = ("+x", "-x", "+y", "-y", "+z", "-z", "away-from-robot", "toward-robot", "start-point")
+
+
+@dataclass(frozen=True)
+class DirectionConfig:
+    rule: str = _param(
+        "+x",
+        "travel direction: along a base axis (+x -x +y -y +z -z), away-from-robot or toward-robot (the base "
+        "origin), or start-point (start nearest start_m); see weldseam/pipeline/direction.py",
+        DIRECTION_RULES,
+    )
+    start_m: tuple[float, float, float] | None = _param(
+        None, "rule start-point: each seam starts at the end (a closed seam at the pose) nearest this point"
+    )
+    closed_sense: str = _param(
+        "ccw", "a closed seam turns counter-clockwise (ccw) or clockwise (cw) seen from the rule's direction",
+        ("ccw", "cw"),
+    )
+
+
 @dataclass(frozen=True)
 class OutputConfig:
     format: str = _param(
@@ -163,6 +183,7 @@ class PlanConfig:
     order: OrderConfig = field(default_factory=OrderConfig)
     section: SectionConfig = field(default_factory=SectionConfig)
     resample: ResampleConfig = field(default_factory=ResampleConfig)
+    direction: DirectionConfig = field(default_factory=DirectionConfig)
     output: OutputConfig = field(default_factory=OutputConfig)
 
 
@@ -304,7 +325,8 @@ def check_relations(config: PlanConfig) -> None:
     """Refuse parameters that cannot work together, before any data is read: InputError naming
     the key. Sizes in POSITIVE_KEYS > 0; condition.working_voxel_m >= condition.voxel_m; each
     radius of WORKING_RADIUS_KEYS (in use) between 1 and MAX_RADIUS_VOXELS working voxels;
-    order.link_m >= grid.leaf_m; resample.spacing_m >= MIN_SPACING_M."""
+    order.link_m >= grid.leaf_m; direction.start_m with rule start-point only;
+    resample.spacing_m >= MIN_SPACING_M."""
 
     def value(key: str) -> float:
         section, name = key.split(".")
@@ -339,6 +361,11 @@ def check_relations(config: PlanConfig) -> None:
         raise InputError(
             f"order.link_m {value('order.link_m'):g} is below grid.leaf_m {value('grid.leaf_m'):g}: "
             "neighbouring grid nodes could never be linked"
+        )
+    if (config.direction.rule == "start-point") != (config.direction.start_m is not None):
+        raise InputError(
+            "direction.start_m must be given with direction.rule start-point, and only then "
+            f"(rule {config.direction.rule}, start_m {config.direction.start_m})"
         )
     if value("resample.spacing_m") < MIN_SPACING_M:
         raise InputError(

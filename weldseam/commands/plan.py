@@ -75,6 +75,13 @@ def plan(
         Optional[float],
         typer.Option(help="Pose spacing along the seam, mm (default 2)."),
     ] = None,
+    direction: Annotated[
+        Optional[str],
+        typer.Option(
+            help="Travel direction: +x -x +y -y +z -z (base axes; write --direction=-x), away-from-robot, "
+            "toward-robot, or a start point x,y,z (m: each seam starts at its end nearest it). Default +x.",
+        ),
+    ] = None,
     config_file: Annotated[
         Optional[str],
         typer.Option(
@@ -121,6 +128,8 @@ def plan(
             if (box[:3] >= box[3:]).any():
                 raise InputError(f"--crop: each lower corner value must be below the upper one, got {crop}")
             overrides.setdefault("condition", {}).update(crop_min_m=box[:3].tolist(), crop_max_m=box[3:].tolist())
+        if direction is not None:
+            overrides["direction"] = _direction_rule(direction)
         config = effective_config(config_file, overrides)
         # Every output is checked before any work: a bad name must not cost a whole run.
         path_fmt = path_format(output, None if config.output.format == "auto" else config.output.format)
@@ -165,6 +174,21 @@ def plan(
             for message in result.warnings:
                 stderr(f"Warning: {message}")
             _report(result, output, time.perf_counter() - started, verbose)
+
+
+def _direction_rule(text: str) -> dict:
+    """The `[direction]` overrides of --direction: a rule name, or a start point x,y,z (m)."""
+    from weldseam.config import DIRECTION_RULES
+    from weldseam.io.poses import parse_vector
+
+    names = [rule for rule in DIRECTION_RULES if rule != "start-point"]
+    if text in names:
+        return {"rule": text, "start_m": None}
+    try:
+        point = parse_vector(text, 3, "--direction")
+    except InputError:
+        raise InputError(f"--direction: expected {', '.join(names)} or a start point x,y,z (m), got {text!r}") from None
+    return {"rule": "start-point", "start_m": point.tolist()}
 
 
 def _write_report(target: str, scan, result, stages: dict) -> None:

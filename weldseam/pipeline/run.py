@@ -24,6 +24,7 @@ from weldseam.pipeline.assemble import assemble_seams
 from weldseam.pipeline.boundary import boundary_mask
 from weldseam.pipeline.condition import condition_points, sparse_points
 from weldseam.pipeline.descriptor import gradient_descriptor
+from weldseam.pipeline.direction import orient_paths
 from weldseam.pipeline.grid import voxel_centroids
 from weldseam.pipeline.merge import merge_frames
 from weldseam.pipeline.neighbours import pairs_among, pairs_graph, radius_graph, radius_pairs
@@ -254,6 +255,7 @@ def plan_paths(
                     closed=seam.closed, joint=seam.joint, confidence=seam.confidence,
                 )
             )
+        paths = orient_paths(paths, c.direction)  # the travel direction by the user's rule: pipeline/direction.py
     if paths:
         emit("path", np.vstack([p.positions_m for p in paths]))
     if not paths and not allow_empty:
