@@ -250,3 +250,61 @@ def test_an_unwritable_folder_is_one_line_exit_2_before_the_pipeline_runs(flat_p
     line = one_error_line(result, str(target))
     assert "cannot" in line and "Traceback" not in result.stderr.decode()
     assert not (tmp_path / "p.json").exists()
+
+
+SAMPLES = __import__("pathlib").Path(__file__).resolve().parents[1] / "samples"
+
+
+@pytest.mark.parametrize("depth_scale, median", [(1.0, "438 m"), (1e6, "0.000438 m")])
+def test_a_depth_scale_wrong_by_1000_says_what_to_pass(tmp_path, depth_scale, median):
+    intrinsics = json.loads((SAMPLES / "d415.intrinsics.json").read_text())
+    intrinsics["depth_scale"] = depth_scale
+    path = tmp_path / "i.json"
+    path.write_text(json.dumps(intrinsics))
+    result = weldseam("plan", SAMPLES / "fillet_t.png", "--intrinsics", path, "-o", tmp_path / "p.json")
+    assert result.returncode == 2
+    one_error_line(result, f"fillet_t.png: the median depth is {median} with depth_scale {depth_scale:g} (units "
+                           f"per metre, {path}), not a depth camera's 0.05-10 m: depth_scale 1000 gives 0.438 m")
+
+
+@pytest.fixture(scope="module")
+def camera_frame_cloud(tmp_path_factory):
+    """The v_butt sample as its camera saw it: in the camera frame."""
+    from weldseam.geometry import transform_points
+    from weldseam.io.clouds import read_cloud
+    from weldseam.io.poses import read_camera_pose
+
+    path = tmp_path_factory.mktemp("camera") / "seen.npy"
+    T_base_camera = read_camera_pose(SAMPLES / "v_butt.pose.json")
+    np.save(path, transform_points(np.linalg.inv(T_base_camera), read_cloud(SAMPLES / "v_butt.ply")[0]))
+    return path
+
+
+def test_a_camera_frame_cloud_given_as_base_with_its_pose_is_refused(camera_frame_cloud, tmp_path):
+    result = weldseam("plan", camera_frame_cloud, "--camera-pose", SAMPLES / "v_butt.pose.json", "-o",
+                      tmp_path / "p.json")
+    assert result.returncode == 2
+    one_error_line(result, f"{camera_frame_cloud}: only 11% of the points lie in front of the camera its pose places",
+                   "pass --cloud-frame camera")
+    placed = weldseam("plan", camera_frame_cloud, "--cloud-frame", "camera", "--camera-pose",
+                      SAMPLES / "v_butt.pose.json", "-o", tmp_path / "p.json", "-q")
+    assert placed.returncode == 0, placed.stderr
+
+
+def test_a_camera_frame_cloud_without_a_pose_gets_a_hint_not_just_no_seam(camera_frame_cloud, tmp_path):
+    result = weldseam("plan", camera_frame_cloud, "-o", tmp_path / "p.json")
+    assert result.returncode == 3
+    line = one_error_line(result, "no weld seam found", f"{camera_frame_cloud} looks like a camera-frame cloud",
+                          "pass --cloud-frame camera with --camera-pose")
+    assert line.count("Error") == 1
+    explicit = weldseam("plan", camera_frame_cloud, "--cloud-frame", "base", "-o", tmp_path / "p.json")
+    assert explicit.returncode == 3 and "looks like" not in explicit.stderr.decode()  # the user said base
+
+
+def test_a_base_frame_cloud_is_not_taken_for_a_camera_frame_one(groove_ply):
+    from weldseam.io.scan import camera_frame_hint
+    from weldseam.types import Scan
+
+    assert camera_frame_hint(Scan(v_groove_cloud(np.random.default_rng(1)), source="groove")) is None
+    lifted = v_groove_cloud(np.random.default_rng(1)) + [0.0, 0.0, 0.4]  # as a camera 0.4 m above would see it
+    assert camera_frame_hint(Scan(lifted, source="lifted")).startswith("lifted looks like a camera-frame cloud")

@@ -28,7 +28,7 @@ from weldseam.commands.common import (
     reported,
     stderr,
 )
-from weldseam.errors import InputError
+from weldseam.errors import InputError, NoSeamError
 
 EPILOG = (
     "Example:\n\n"
@@ -159,7 +159,7 @@ def plan(
             if dump_stages is not None:
                 write_ply(dump_stages / f"{next(counter):02d}_{stage}.ply", points, values=values)
 
-        with _progress(enabled=not quiet) as on_stage:
+        with _progress(enabled=not quiet) as on_stage, _hinted(placed.hints):
             if len(placed.frames) > 1:
                 result = plan_frames(
                     placed.frames, config, source=placed.source, dump=dump, on_stage=on_stage, allow_empty=allow_empty
@@ -201,6 +201,17 @@ def _write_report(target: str, scan, result, stages: dict) -> None:
     candidates = stages.get("segment", (None, None))[0]
     record = json.loads(format_path_json(result))
     write_report(scan.points_m, list(result.paths), record, html, png, scan_name=scan.source, candidates_m=candidates)
+
+
+@contextmanager
+def _hinted(hints: tuple[str, ...]):
+    """A "no weld seam found" says what may be wrong with the inputs, when something looks so."""
+    try:
+        yield
+    except NoSeamError as error:
+        if not hints:
+            raise
+        raise NoSeamError(f"{error}; {'; '.join(hints)}") from None
 
 
 @contextmanager

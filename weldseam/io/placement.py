@@ -27,7 +27,7 @@ from weldseam.io.depth import intrinsics_from_json, read_intrinsics
 from weldseam.io.files import read_input, read_json
 from weldseam.io.hand_eye import camera_pose, joints_robot, read_hand_eye
 from weldseam.io.poses import FramePose, parse_vector, pose_vector_matrix, read_pose_file, rigid_transform
-from weldseam.io.scan import UNIT_SCALE, load_scan, read_frames_manifest
+from weldseam.io.scan import UNIT_SCALE, camera_frame_hint, load_scan, read_frames_manifest
 from weldseam.io.sidecars import own_pose_name, sidecars
 from weldseam.types import FRAMES, Intrinsics, RunResult, Scan
 
@@ -84,6 +84,7 @@ class Placed:
     messages: tuple[str, ...]
     warnings: tuple[str, ...]
     placements: tuple[dict, ...]
+    hints: tuple[str, ...] = ()
 
     @property
     def frame(self) -> str:
@@ -122,7 +123,7 @@ def place_scans(options: PlacementOptions, recorded: Recorded | None = None, std
     if options.units is not None and options.units not in UNIT_SCALE:
         raise InputError(f"--units must be m or mm, got {options.units!r}")
     origin = parse_vector(options.camera_origin, 3, "--camera-origin") if options.camera_origin else None
-    scans, messages, warnings, records = [], [], [], []
+    scans, messages, warnings, records, hints = [], [], [], [], []
     for frame in frames:
         data = _stdin_bytes(frame.scan, stdin)
         found = None
@@ -131,19 +132,20 @@ def place_scans(options: PlacementOptions, recorded: Recorded | None = None, std
             if found is None:
                 messages.append(f"{frame.scan}: {recorded.source} was made from another scan: only its parameters "
                                 "are used, not its placement")
-        scan, frame_messages, frame_warnings, record = _place(
+        scan, frame_messages, frame_warnings, record, hint = _place(
             frame, options, calibration, pose_options_given, origin, found, recorded, data, len(frames) > 1
         )
+        hints += [hint] if hint else []
         scans.append(scan)
         messages += frame_messages
         warnings += frame_warnings
         records.append(record)
     source = options.frames if options.frames is not None else ",".join(frame.scan for frame in frames)
-    return Placed(tuple(scans), source, tuple(messages), tuple(warnings), tuple(records))
+    return Placed(tuple(scans), source, tuple(messages), tuple(warnings), tuple(records), tuple(hints))
 
 
 def _place(frame: _Frame, options, calibration, pose_options_given, origin, found, recorded, data, needs_pose):
-    """(Scan, messages, warnings, record) of one frame; `found`: its recorded placement or None."""
+    """(Scan, messages, warnings, record, hint or None) of one frame; `found`: its recorded placement."""
     is_depth = frame.scan != "-" and Path(frame.scan).suffix.lower() == ".png"
     messages, sources = [], {}
 
@@ -191,11 +193,17 @@ def _place(frame: _Frame, options, calibration, pose_options_given, origin, foun
     units = chosen(options.units, "units", "m")
     camera_origin = chosen(origin, "camera_origin_m", None)
     scan, notes = load_scan(
-        frame.scan, intrinsics=intrinsics, T_base_camera=T_base_camera, cloud_frame=cloud_frame,
+        frame.scan, intrinsics=intrinsics, intrinsics_source=sources.get("intrinsics", "the intrinsics"),
+        T_base_camera=T_base_camera, cloud_frame=cloud_frame,
         camera_origin_m=camera_origin, units=units, stdin=None if data is None else io.BytesIO(data),
     )
     placement = FramePlacement("camera" if is_depth else cloud_frame, units, intrinsics, T_base_camera, camera_origin)
-    return scan, messages, [*pose_warnings, *notes], placement_record(placement, robot, sources)
+    hint = None
+    if not is_depth and T_base_camera is None and camera_origin is None and cloud_frame == "base" and (
+            options.cloud_frame is None and found is None):
+        hint = camera_frame_hint(scan)
+    warnings = [*pose_warnings, *notes, *([hint] if hint else [])]
+    return scan, messages, warnings, placement_record(placement, robot, sources), hint
 
 
 def placement_record(placement: FramePlacement, robot: str | None, sources: dict[str, str]) -> dict:

@@ -11,7 +11,7 @@ import numpy as np
 from weldseam.errors import InputError
 from weldseam.geometry import column_bounds, finite_rows, transform_points
 from weldseam.io.clouds import read_cloud
-from weldseam.io.depth import backproject_depth, read_depth_png, read_intrinsics
+from weldseam.io.depth import backproject_depth, read_depth_png
 from weldseam.io.files import read_json
 from weldseam.io.poses import POSE_KEYS, FramePose, pose_from_json, read_pose_file
 from weldseam.types import FRAMES, Intrinsics, Scan
@@ -19,22 +19,31 @@ from weldseam.types import FRAMES, Intrinsics, Scan
 UNIT_SCALE = {"m": 1.0, "mm": 0.001}
 LARGEST_PLAUSIBLE_EXTENT_M = 10.0
 SMALLEST_PLAUSIBLE_EXTENT_M = 0.01
+# Depth cameras see from a few centimetres to a few metres; a median depth outside this range
+# means the depth scale is off, most often by 1000 (millimetres taken as metres or back).
+PLAUSIBLE_DEPTH_M = (0.05, 10.0)
+# A camera sees what lies in front of it, within its field of view (at most ~45 degrees off its
+# axis for depth cameras; 70 leaves room for pose error). Fewer points than this share inside
+# that cone: the cloud is not where the pose says the camera saw it.
+VIEW_CONE_DEG = 70.0
+MIN_IN_VIEW = 0.5
 FRAME_KEYS = ("scan", "intrinsics", "pose")  # a manifest frame's keys besides an inline pose
 
 
 def load_scan(
     source: str,
     *,
-    intrinsics_path: str | None = None,
     intrinsics: Intrinsics | None = None,
+    intrinsics_source: str = "the intrinsics",
     T_base_camera: np.ndarray | None = None,
     cloud_frame: str = "base",
     camera_origin_m: np.ndarray | None = None,
     units: str = "m",
     stdin=None,
 ) -> tuple[Scan, list[str]]:
-    """Read `source` (cloud file, `-` for a PLY on stdin, or a 16-bit depth PNG with
-    `intrinsics_path` or `intrinsics`) and return it with any notes for the user.
+    """Read `source` (cloud file, `-` for a PLY on stdin, or a 16-bit depth PNG with its
+    `intrinsics`, read from `intrinsics_source`, named in messages) and return it with any
+    notes for the user.
 
     A depth image, and a cloud with `cloud_frame="camera"`, are in the camera frame and are
     mapped to the base frame by `T_base_camera` (4, 4); without it they stay in the camera
@@ -50,24 +59,22 @@ def load_scan(
     pose = T_base_camera
     is_depth = source != "-" and Path(source).suffix.lower() == ".png"
     if is_depth:
-        if intrinsics is None and intrinsics_path is None:
-            raise InputError(f"{source}: a depth image needs --intrinsics FILE.json")
         if intrinsics is None:
-            intrinsics = read_intrinsics(intrinsics_path)
-        described = intrinsics_path or "the intrinsics"
+            raise InputError(f"{source}: a depth image needs --intrinsics FILE.json")
         depth = read_depth_png(source)
         if depth.shape != (intrinsics.height, intrinsics.width):
             raise InputError(
-                f"{source}: image is {depth.shape[1]}x{depth.shape[0]} but {described} says "
+                f"{source}: image is {depth.shape[1]}x{depth.shape[0]} but {intrinsics_source} says "
                 f"{intrinsics.width}x{intrinsics.height}"
             )
         points = backproject_depth(depth, intrinsics)
         if len(points) == 0:
             raise InputError(f"{source}: the depth image has no valid (non-zero) pixels")
+        _check_depth_scale(source, points, intrinsics.depth_scale, intrinsics_source)
         sha256 = hashlib.sha256(Path(source).read_bytes()).hexdigest()
         in_camera_frame = True
     else:
-        if intrinsics_path is not None or intrinsics is not None:
+        if intrinsics is not None:
             raise InputError(f"{source}: --intrinsics applies to depth images (.png) only")
         points, sha256 = read_cloud(source, stdin=stdin)
         points = points * UNIT_SCALE[units]
@@ -75,6 +82,8 @@ def load_scan(
         in_camera_frame = cloud_frame == "camera"
     if in_camera_frame and pose is not None:
         points = transform_points(pose, points)
+    elif pose is not None:
+        _check_in_view(source, points, pose)
     if camera_origin_m is not None:
         origin = np.asarray(camera_origin_m, dtype=np.float64)
     elif pose is not None:
@@ -154,3 +163,49 @@ def _check_units(source: str, points: np.ndarray, units: str) -> None:
         raise InputError(
             f"{source}: the cloud spans only {extent * 1000:.4g} mm, too small for a workpiece scan; {hint}"
         )
+
+
+def _check_depth_scale(source: str, points: np.ndarray, depth_scale: float, intrinsics: str) -> None:
+    """InputError naming the depth_scale to pass when the median depth is implausible."""
+    median = float(np.median(points[:, 2]))
+    low, high = PLAUSIBLE_DEPTH_M
+    if low <= median <= high:
+        return
+    factor = 1000.0 ** round(np.log10(median / 0.5) / 3)
+    raise InputError(
+        f"{source}: the median depth is {median:.4g} m with depth_scale {depth_scale:g} (units per metre, "
+        f"{intrinsics}), not a depth camera's {low:g}-{high:g} m: depth_scale {depth_scale * factor:g} gives "
+        f"{median / factor:.3g} m"
+    )
+
+
+def _check_in_view(source: str, points: np.ndarray, T_base_camera: np.ndarray) -> None:
+    """InputError when most of a base-frame cloud lies outside the view of the camera at
+    T_base_camera (4, 4): the cloud is in another frame (most often the camera's own)."""
+    finite = points.take(np.flatnonzero(finite_rows(points)), axis=0)
+    in_camera = transform_points(np.linalg.inv(T_base_camera), finite)
+    off_axis = np.degrees(np.arctan2(np.hypot(in_camera[:, 0], in_camera[:, 1]), in_camera[:, 2]))
+    share = float(np.mean(off_axis < VIEW_CONE_DEG))
+    if share < MIN_IN_VIEW:
+        raise InputError(
+            f"{source}: only {share:.0%} of the points lie in front of the camera its pose places "
+            f"(within {VIEW_CONE_DEG:g} degrees of its axis): if the cloud is in the camera frame, pass "
+            "--cloud-frame camera; else check the pose"
+        )
+
+
+def camera_frame_hint(scan: Scan) -> str | None:
+    """For a cloud taken as base frame with no pose: a hint when it looks like camera-frame
+    data (nearly every point 0.05-10 m in front of the origin, within VIEW_CONE_DEG of +z, as
+    a camera's own cloud is, while a part on a table in the base frame lies around z = 0)."""
+    finite = scan.points_m.take(np.flatnonzero(finite_rows(scan.points_m)), axis=0)
+    depth = finite[:, 2]
+    off_axis = np.degrees(np.arctan2(np.hypot(finite[:, 0], finite[:, 1]), depth))
+    low, high = PLAUSIBLE_DEPTH_M
+    in_view = (depth > low) & (depth < high) & (off_axis < VIEW_CONE_DEG)
+    if np.mean(in_view) < 0.99:
+        return None
+    return (
+        f"{scan.source} looks like a camera-frame cloud (every point {depth.min():.2f}-{depth.max():.2f} m in front "
+        "of the origin, within a camera's view): if it is, pass --cloud-frame camera with --camera-pose"
+    )
