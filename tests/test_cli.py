@@ -3,6 +3,7 @@
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,6 +14,7 @@ from weldseam.config import PlanConfig
 from weldseam.io.clouds import write_ply
 
 CAMERA = "0,0.05,0.45"
+SAMPLES = Path(__file__).resolve().parents[1] / "samples"
 
 
 def weldseam(*args, stdin: bytes | None = None):
@@ -209,7 +211,6 @@ def _unwritable_folder():
     """/sys refuses new files even to root (chmod does not stop root)."""
     import os
     import secrets
-    from pathlib import Path
 
     folder = Path("/sys")
     probe = folder / f"weldseam-{secrets.token_hex(4)}"
@@ -251,8 +252,6 @@ def test_an_unwritable_folder_is_one_line_exit_2_before_the_pipeline_runs(flat_p
     assert "cannot" in line and "Traceback" not in result.stderr.decode()
     assert not (tmp_path / "p.json").exists()
 
-
-SAMPLES = __import__("pathlib").Path(__file__).resolve().parents[1] / "samples"
 
 
 @pytest.mark.parametrize("depth_scale, median", [(1.0, "438 m"), (1e6, "0.000438 m")])

@@ -3,6 +3,7 @@
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,6 +12,7 @@ from tests.conftest import v_groove_cloud
 from weldseam.io.clouds import write_ply
 
 CAMERA = "0,0.05,0.45"
+SAMPLES = Path(__file__).resolve().parents[1] / "samples"
 
 
 def weldseam(*args):
@@ -96,8 +98,6 @@ def test_a_working_voxel_finer_than_the_fine_voxel_is_refused_before_the_scan_is
     assert both.returncode == 2
     assert both.stderr.decode().startswith("Error: smooth.radius_m 0.006 spans 60 working voxels")
 
-
-SAMPLES = __import__("pathlib").Path(__file__).resolve().parents[1] / "samples"
 
 
 def test_config_of_a_run_json_reproduces_the_run_byte_for_byte(tmp_path):

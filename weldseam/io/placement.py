@@ -147,12 +147,14 @@ def place_scans(options: PlacementOptions, recorded: Recorded | None = None, std
 def _place(frame: _Frame, options, calibration, pose_options_given, origin, found, recorded, data, needs_pose):
     """(Scan, messages, warnings, record, hint or None) of one frame; `found`: its recorded placement."""
     is_depth = frame.scan != "-" and Path(frame.scan).suffix.lower() == ".png"
-    messages, sources = [], {}
+    sources: dict[str, str] = {}
+
+    unnamed: dict[str, list[str]] = {}  # source -> what was taken from it, for one line each
 
     def take(kind: str, source: str) -> None:
         """Use an input the user did not name for this scan, and say so."""
         sources[kind] = source
-        messages.append(f"{frame.scan}: {'camera pose' if kind == 'pose' else kind} from {source}")
+        unnamed.setdefault(source, []).append("camera pose" if kind == "pose" else kind)
 
     intrinsics = None
     if frame.intrinsics is not None:
@@ -181,6 +183,7 @@ def _place(frame: _Frame, options, calibration, pose_options_given, origin, foun
         T_base_camera, pose_warnings = camera_pose(pose, calibration, options.robot)
         if pose is not None and pose.joints_rad is not None and calibration.setup == "eye-in-hand":
             robot = joints_robot(pose, options.robot)
+    messages = [f"{frame.scan}: {' and '.join(kinds)} from {source}" for source, kinds in unnamed.items()]
     if needs_pose and T_base_camera is None:
         raise InputError(f"{frame.scan}: no pose: give {own_pose_name(frame.scan)} or use a --frames manifest")
 
