@@ -159,7 +159,8 @@ def test_config_of_a_run_json_reproduces_a_depth_image_placed_by_joints_and_hand
 
 def test_config_of_another_scans_run_gives_only_its_parameters(groove_ply, tmp_path):
     first = tmp_path / "first.json"
-    assert weldseam("plan", groove_ply, "--camera-origin", CAMERA, "--spacing-mm", "3", "-o", first, "-q").returncode == 0
+    ran = weldseam("plan", groove_ply, "--camera-origin", CAMERA, "--spacing-mm", "3", "-o", first, "-q")
+    assert ran.returncode == 0, ran.stderr
     other = tmp_path / "other.npy"
     np.save(other, v_groove_cloud(np.random.default_rng(4)))
     result = weldseam("plan", other, "--config", first, "-o", tmp_path / "other.json")

@@ -38,8 +38,8 @@ EPILOG = (
     "  weldseam plan left.png top.png right.png --intrinsics d415.json --hand-eye H.json -o path.json\n\n"
     "  (several frames of one workpiece: left.pose.json, top.pose.json, right.pose.json beside them)\n\n"
     "  weldseam plan --frames frames.json -o path.json\n\n"
-    "  weldseam plan scan.ply --direction away-from-robot -o path.json   (or --direction=-y, or a start point x,y,z)\n\n"
-    "  weldseam plan scan.ply --config path.json -o again.csv   (reruns path.json's run on the scan it was made from)\n\n"
+    "  weldseam plan scan.ply --direction away-from-robot -o path.json   (or --direction=-y, or a point x,y,z)\n\n"
+    "  weldseam plan scan.ply --config path.json -o again.csv   (reruns path.json's run on its own scan)\n\n"
     f"{PLACEMENT_HELP}\n\n"
     f"Exit codes:\n\n{EXIT_TABLE}"
 )
