@@ -180,12 +180,15 @@ def _check_depth_scale(source: str, points: np.ndarray, depth_scale: float, intr
 
 
 def _check_in_view(source: str, points: np.ndarray, T_base_camera: np.ndarray) -> None:
-    """InputError when most of a base-frame cloud lies outside the view of the camera at
-    T_base_camera (4, 4): the cloud is in another frame (most often the camera's own)."""
+    """InputError for a cloud given as base frame that looks like the camera's own (see
+    `_camera_like`) while most of it lies outside the view of the camera at T_base_camera (4, 4):
+    a camera-frame cloud without --cloud-frame camera. A pose that only gives a base-frame
+    cloud its camera origin is not questioned."""
     finite = points.take(np.flatnonzero(finite_rows(points)), axis=0)
+    if not _camera_like(finite):
+        return
     in_camera = transform_points(np.linalg.inv(T_base_camera), finite)
-    off_axis = np.degrees(np.arctan2(np.hypot(in_camera[:, 0], in_camera[:, 1]), in_camera[:, 2]))
-    share = float(np.mean(off_axis < VIEW_CONE_DEG))
+    share = float(np.mean(_in_view(in_camera)))
     if share < MIN_IN_VIEW:
         raise InputError(
             f"{source}: only {share:.0%} of the points lie in front of the camera its pose places "
@@ -194,17 +197,27 @@ def _check_in_view(source: str, points: np.ndarray, T_base_camera: np.ndarray) -
         )
 
 
+def _in_view(points: np.ndarray) -> np.ndarray:
+    """(N,) bool: camera-frame points (N, 3) within VIEW_CONE_DEG of the +z axis, at a depth
+    camera's distance (PLAUSIBLE_DEPTH_M)."""
+    off_axis = np.degrees(np.arctan2(np.hypot(points[:, 0], points[:, 1]), points[:, 2]))
+    low, high = PLAUSIBLE_DEPTH_M
+    return (points[:, 2] > low) & (points[:, 2] < high) & (off_axis < VIEW_CONE_DEG)
+
+
+def _camera_like(points: np.ndarray) -> bool:
+    """Whether finite points (N, 3) lie as a camera's own cloud does: nearly all in view of a
+    camera at the origin looking along +z (a part on a table in the base frame lies around z = 0)."""
+    return bool(np.mean(_in_view(points)) >= 0.99)
+
+
 def camera_frame_hint(scan: Scan) -> str | None:
     """For a cloud taken as base frame with no pose: a hint when it looks like camera-frame
-    data (nearly every point 0.05-10 m in front of the origin, within VIEW_CONE_DEG of +z, as
-    a camera's own cloud is, while a part on a table in the base frame lies around z = 0)."""
+    data (`_camera_like`), else None."""
     finite = scan.points_m.take(np.flatnonzero(finite_rows(scan.points_m)), axis=0)
-    depth = finite[:, 2]
-    off_axis = np.degrees(np.arctan2(np.hypot(finite[:, 0], finite[:, 1]), depth))
-    low, high = PLAUSIBLE_DEPTH_M
-    in_view = (depth > low) & (depth < high) & (off_axis < VIEW_CONE_DEG)
-    if np.mean(in_view) < 0.99:
+    if not _camera_like(finite):
         return None
+    depth = finite[:, 2]
     return (
         f"{scan.source} looks like a camera-frame cloud (every point {depth.min():.2f}-{depth.max():.2f} m in front "
         "of the origin, within a camera's view): if it is, pass --cloud-frame camera with --camera-pose"
