@@ -3,6 +3,7 @@
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,6 +14,7 @@ from weldseam.config import PlanConfig
 from weldseam.io.clouds import write_ply
 
 CAMERA = "0,0.05,0.45"
+SAMPLES = Path(__file__).resolve().parents[1] / "samples"
 
 
 def weldseam(*args, stdin: bytes | None = None):
@@ -193,3 +195,115 @@ def test_crop_box_keeps_the_seam_inside_it(groove_ply, tmp_path):
     bad = weldseam("plan", groove_ply, "--crop=0.1,0,0,0,1,1", "-o", tmp_path / "bad.csv")
     assert bad.returncode == 2
     one_error_line(bad, "--crop")
+
+
+@pytest.fixture(scope="module")
+def flat_plate(tmp_path_factory):
+    """A plate with no seam: planning it ends in exit 3 only after the whole pipeline has run."""
+    rng = np.random.default_rng(3)
+    grid = np.stack(np.meshgrid(np.arange(0, 0.2, 0.0008), np.arange(0, 0.15, 0.0008)), -1).reshape(-1, 2)
+    plate = tmp_path_factory.mktemp("plate") / "plate.npy"
+    np.save(plate, np.column_stack([grid, rng.normal(0, 0.0003, len(grid))]))
+    return plate
+
+
+def _unwritable_folder():
+    """/sys refuses new files even to root (chmod does not stop root)."""
+    import os
+    import secrets
+
+    folder = Path("/sys")
+    probe = folder / f"weldseam-{secrets.token_hex(4)}"
+    try:
+        os.close(os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL))
+    except OSError:
+        return folder
+    probe.unlink()
+    pytest.skip("no unwritable folder here")
+
+
+@pytest.mark.parametrize("option, target, fragment", [
+    ("-o", "missing/path.json", "the folder {tmp}/missing does not exist"),
+    ("-o", "file.txt/path.json", "{tmp}/file.txt is a file, not a folder"),
+    ("-o", "path.txt", "unknown path file format '.txt'"),
+    ("-o", "out.json", "{tmp}/out.json: is a folder, not a file name"),
+    ("--report", "missing/r.html", "the folder {tmp}/missing does not exist"),
+    ("--dump-stages", "file.txt", "{tmp}/file.txt: is a file, not a folder"),
+    ("--dump-stages", "file.txt/dump", "cannot create the folder"),
+])
+def test_a_bad_output_is_one_line_exit_2_before_the_pipeline_runs(flat_plate, tmp_path, option, target, fragment):
+    (tmp_path / "file.txt").write_text("not a folder")
+    (tmp_path / "out.json").mkdir()
+    extra = [] if option == "-o" else ["-o", tmp_path / "p.json"]
+    result = weldseam("plan", flat_plate, "--camera-origin", "0.1,0.07,0.45", option, tmp_path / target, *extra)
+    assert result.returncode == 2  # not 3: the plate's "no seam" would come after the whole pipeline
+    one_error_line(result, fragment.format(tmp=tmp_path))
+    assert sorted(path.name for path in tmp_path.iterdir()) == ["file.txt", "out.json"]
+
+
+@pytest.mark.parametrize("option", ["-o", "--report", "--dump-stages"])
+def test_an_unwritable_folder_is_one_line_exit_2_before_the_pipeline_runs(flat_plate, tmp_path, option):
+    folder = _unwritable_folder()
+    target = folder / ("dump" if option == "--dump-stages" else "out.json" if option == "-o" else "r.html")
+    extra = [] if option == "-o" else ["-o", tmp_path / "p.json"]
+    result = weldseam("plan", flat_plate, "--camera-origin", "0.1,0.07,0.45", option, target, *extra)
+    assert result.returncode == 2
+    line = one_error_line(result, str(target))
+    assert "cannot" in line and "Traceback" not in result.stderr.decode()
+    assert not (tmp_path / "p.json").exists()
+
+
+
+@pytest.mark.parametrize("depth_scale, median", [(1.0, "438 m"), (1e6, "0.000438 m")])
+def test_a_depth_scale_wrong_by_1000_says_what_to_pass(tmp_path, depth_scale, median):
+    intrinsics = json.loads((SAMPLES / "d415.intrinsics.json").read_text())
+    intrinsics["depth_scale"] = depth_scale
+    path = tmp_path / "i.json"
+    path.write_text(json.dumps(intrinsics))
+    result = weldseam("plan", SAMPLES / "fillet_t.png", "--intrinsics", path, "-o", tmp_path / "p.json")
+    assert result.returncode == 2
+    one_error_line(result, f"fillet_t.png: the median depth is {median} with depth_scale {depth_scale:g} (units "
+                           f"per metre, {path}), not a depth camera's 0.05-10 m: depth_scale 1000 gives 0.438 m")
+
+
+@pytest.fixture(scope="module")
+def camera_frame_cloud(tmp_path_factory):
+    """The v_butt sample as its camera saw it: in the camera frame."""
+    from weldseam.geometry import transform_points
+    from weldseam.io.clouds import read_cloud
+    from weldseam.io.poses import read_camera_pose
+
+    path = tmp_path_factory.mktemp("camera") / "seen.npy"
+    T_base_camera = read_camera_pose(SAMPLES / "v_butt.pose.json")
+    np.save(path, transform_points(np.linalg.inv(T_base_camera), read_cloud(SAMPLES / "v_butt.ply")[0]))
+    return path
+
+
+def test_a_camera_frame_cloud_given_as_base_with_its_pose_is_refused(camera_frame_cloud, tmp_path):
+    result = weldseam("plan", camera_frame_cloud, "--camera-pose", SAMPLES / "v_butt.pose.json", "-o",
+                      tmp_path / "p.json")
+    assert result.returncode == 2
+    one_error_line(result, f"{camera_frame_cloud}: only 1% of the points lie in front of the camera its pose places",
+                   "pass --cloud-frame camera")
+    placed = weldseam("plan", camera_frame_cloud, "--cloud-frame", "camera", "--camera-pose",
+                      SAMPLES / "v_butt.pose.json", "-o", tmp_path / "p.json", "-q")
+    assert placed.returncode == 0, placed.stderr
+
+
+def test_a_camera_frame_cloud_without_a_pose_gets_a_hint_not_just_no_seam(camera_frame_cloud, tmp_path):
+    result = weldseam("plan", camera_frame_cloud, "-o", tmp_path / "p.json")
+    assert result.returncode == 3
+    line = one_error_line(result, "no weld seam found", f"{camera_frame_cloud} looks like a camera-frame cloud",
+                          "pass --cloud-frame camera with --camera-pose")
+    assert line.count("Error") == 1
+    explicit = weldseam("plan", camera_frame_cloud, "--cloud-frame", "base", "-o", tmp_path / "p.json")
+    assert explicit.returncode == 3 and "looks like" not in explicit.stderr.decode()  # the user said base
+
+
+def test_a_base_frame_cloud_is_not_taken_for_a_camera_frame_one(groove_ply):
+    from weldseam.io.scan import camera_frame_hint
+    from weldseam.types import Scan
+
+    assert camera_frame_hint(Scan(v_groove_cloud(np.random.default_rng(1)), source="groove")) is None
+    lifted = v_groove_cloud(np.random.default_rng(1)) + [0.0, 0.0, 0.4]  # as a camera 0.4 m above would see it
+    assert camera_frame_hint(Scan(lifted, source="lifted")).startswith("lifted looks like a camera-frame cloud")

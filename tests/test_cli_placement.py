@@ -87,13 +87,23 @@ def test_bad_hand_eye_file_is_one_line_naming_it(tmp_path, content, fragment):
     (["--joints", "0,0,0,0,0,0"], "--joints: a flange pose or joint angles need a hand-eye file"),
     (["--flange-pose", "0.1,0.2,0.3"], "--flange-pose: expected 6 comma-separated numbers"),
     (["--camera-pose", SAMPLES / "fillet_t.pose.json", "--hand-eye", "HAND"], "give one or the other"),
-    (["--hand-eye", "HAND"], "an eye-in-hand camera needs the robot state"),
+    # the T_base_camera beside the sample scan is its pose, so the hand-eye file is one too many
+    (["--hand-eye", "HAND"], f"{SAMPLES / 'fillet_t.pose.json'} gives T_base_camera, so"),
+    (["--joints", "0,0,0,0,0,0", "--hand-eye", "HAND", "--robot", "ur3"], "--robot must be one of ur5, ur5e, ur10"),
 ])
 def test_conflicting_or_incomplete_options_are_one_line(hand_eye, tmp_path, options, fragment):
     options = [hand_eye if option == "HAND" else option for option in options]
     result = weldseam("plan", *SCAN, *options, "-o", tmp_path / "p.json")
     assert result.returncode == 2
     one_error_line(result, fragment)
+
+
+def test_an_eye_in_hand_camera_without_a_robot_state_is_refused(hand_eye, tmp_path):
+    lone = tmp_path / "lone.png"  # no pose file beside it
+    lone.write_bytes((SAMPLES / "fillet_t.png").read_bytes())
+    result = weldseam("plan", lone, *SCAN[1:], "--hand-eye", hand_eye, "-o", tmp_path / "p.json")
+    assert result.returncode == 2
+    one_error_line(result, "an eye-in-hand camera needs the robot state")
 
 
 def test_eye_to_hand_needs_no_robot_state_and_says_so(reference, tmp_path):
@@ -133,3 +143,95 @@ def test_a_frame_without_a_pose_is_refused(tmp_path):
     result = weldseam("plan", *scans, "--intrinsics", SAMPLES / "d415.intrinsics.json", "-o", tmp_path / "p.json")
     assert result.returncode == 2
     one_error_line(result, f"{scans[1]}: no pose: give {tmp_path / 'b.pose.json'}")
+
+
+def test_a_depth_image_without_a_pose_is_recorded_in_the_camera_frame_with_its_warning(tmp_path):
+    lone = tmp_path / "lone.png"
+    lone.write_bytes((SAMPLES / "fillet_t.png").read_bytes())
+    out = tmp_path / "path.json"
+    result = weldseam("plan", lone, *SCAN[1:], "-o", out)
+    assert result.returncode == 0, result.stderr
+    document = json.loads(out.read_text())
+    warning = f"{lone}: no camera pose: the scan and the path are in the camera frame, not the robot base"
+    assert document["frame"] == "camera"
+    assert document["warnings"] == [warning]
+    assert f"Warning: {warning}" in result.stderr.decode()
+    assert document["input"]["placement"]["T_base_camera"] is None
+    # The path is where the camera saw the seam: the base-frame path mapped into the camera frame.
+    placed = weldseam("plan", lone, *SCAN[1:], "--camera-pose", SAMPLES / "fillet_t.pose.json", "-o",
+                      tmp_path / "base.json", "-q")
+    assert placed.returncode == 0 and json.loads((tmp_path / "base.json").read_text())["frame"] == "base"
+    in_camera = read_paths(out)[0].positions_m
+    in_base = read_paths(tmp_path / "base.json")[0].positions_m
+    mapped = in_base @ T_BASE_CAMERA[:3, :3] - T_BASE_CAMERA[:3, 3] @ T_BASE_CAMERA[:3, :3]  # R^T (p - t)
+    assert np.abs(np.median(in_camera, axis=0) - np.median(mapped, axis=0)).max() < 0.002
+
+
+def test_plan_uses_the_pose_file_beside_the_scan_says_so_and_records_it(reference, tmp_path):
+    scan = tmp_path / "part.png"
+    scan.write_bytes((SAMPLES / "fillet_t.png").read_bytes())
+    (tmp_path / "part.pose.json").write_text((SAMPLES / "fillet_t.pose.json").read_text())
+    out = tmp_path / "path.json"
+    result = weldseam("plan", scan, *SCAN[1:], "-o", out)
+    assert result.returncode == 0, result.stderr
+    assert f"{scan}: camera pose from {tmp_path / 'part.pose.json'} (beside the scan)" in result.stderr.decode()
+    document = json.loads(out.read_text())
+    assert document["frame"] == "base" and document["warnings"] == []
+    placement = document["input"]["placement"]
+    assert placement["from"]["pose"] == f"{tmp_path / 'part.pose.json'} (beside the scan)"
+    np.testing.assert_array_equal(placement["T_base_camera"], T_BASE_CAMERA)
+    same_paths(read_paths(out), reference)
+    (tmp_path / "part.pose.json").rename(tmp_path / "pose.json")  # the folder's pose.json, as batch reads it
+    again = weldseam("plan", scan, *SCAN[1:], "-o", tmp_path / "again.json", "-q")
+    assert again.returncode == 0, again.stderr
+    same_paths(read_paths(tmp_path / "again.json"), reference)
+
+
+def test_every_warning_goes_into_the_record(reference, tmp_path):
+    path = tmp_path / "fixed.json"
+    path.write_text(json.dumps({"setup": "eye-to-hand", "T_base_camera": T_BASE_CAMERA.tolist()}))
+    out = tmp_path / "path.json"
+    result = weldseam("plan", *SCAN, "--hand-eye", path, "--joints", "0,0,0,0,0,0", "-o", out)
+    assert result.returncode == 0, result.stderr
+    warnings = json.loads(out.read_text())["warnings"]
+    assert len(warnings) == 1 and "robot state is not needed" in warnings[0]
+    assert f"Warning: {warnings[0]}" in result.stderr.decode()
+
+
+def test_plan_robot_chooses_the_kinematics_of_the_joint_angles(reference, hand_eye, tmp_path):
+    solutions = inverse(ROBOTS["ur10"], T_BASE_FLANGE)
+    assert len(solutions)
+    joints = ",".join(map(repr, solutions[0].tolist()))
+    out = tmp_path / "path.json"
+    result = weldseam("plan", *SCAN, "--joints", joints, "--robot", "ur10", "--hand-eye", hand_eye, "-o", out, "-q")
+    assert result.returncode == 0, result.stderr
+    same_paths(read_paths(out), reference)
+    placement = json.loads(out.read_text())["input"]["placement"]
+    assert placement["robot"] == "ur10"
+    np.testing.assert_allclose(placement["T_base_camera"], T_BASE_CAMERA, atol=1e-9)
+    as_ur5 = weldseam("plan", *SCAN, "--joints", joints, "--hand-eye", hand_eye, "-o", tmp_path / "ur5.json", "-q",
+                      "--allow-empty")
+    assert as_ur5.returncode == 0, as_ur5.stderr
+    ur5 = json.loads((tmp_path / "ur5.json").read_text())["input"]["placement"]
+    assert ur5["robot"] == "ur5"  # the default, recorded
+    assert np.linalg.norm(np.array(ur5["T_base_camera"])[:3, 3] - T_BASE_CAMERA[:3, 3]) > 0.1
+    pose = tmp_path / "state.json"
+    pose.write_text(json.dumps({"joints_rad": solutions[0].tolist(), "robot": "ur10"}))
+    from_file = weldseam("plan", *SCAN, "--camera-pose", pose, "--hand-eye", hand_eye, "-o", tmp_path / "f.json", "-q")
+    assert from_file.returncode == 0, from_file.stderr
+    same_paths(read_paths(tmp_path / "f.json"), reference)
+    conflict = weldseam("plan", *SCAN, "--camera-pose", pose, "--robot", "ur5e", "--hand-eye", hand_eye, "-o",
+                        tmp_path / "c.json")
+    assert conflict.returncode == 2
+    one_error_line(conflict, f'{pose}: "robot" is ur10 but --robot is ur5e: give one')
+
+
+def test_a_manifest_frame_with_an_unknown_key_is_refused(tmp_path):
+    manifest = tmp_path / "frames.json"
+    manifest.write_text(json.dumps({"frames": [
+        {"scan": str(SAMPLES / "fillet_t.png"), "pose": str(SAMPLES / "fillet_t.pose.json"), "robto": "ur10"},
+        {"scan": str(SAMPLES / "fillet_t.png"), "joints_rad": [0.0] * 6, "robot": "ur10"},
+    ]}))
+    result = weldseam("plan", "--frames", manifest, "-o", tmp_path / "p.json")
+    assert result.returncode == 2
+    one_error_line(result, f'{manifest}: frames[0]: unknown key "robto"')

@@ -70,3 +70,41 @@ def test_a_bad_config_file_is_named_with_its_problem(tmp_path, text, fragment):
 def test_a_missing_config_file_is_named(tmp_path):
     with pytest.raises(InputError, match="config file not found"):
         read_config_file(tmp_path / "nowhere.toml")
+
+
+@pytest.mark.parametrize(
+    ("overrides", "message"),
+    [
+        ({"condition": {"working_voxel_m": 0.0001}},
+         "condition.working_voxel_m 0.0001 is below condition.voxel_m 0.001: the working cloud coarsens the fine "
+         "one, so its voxel must be at least as large"),
+        ({"condition": {"voxel_m": 0.0001, "working_voxel_m": 0.0001}},
+         "smooth.radius_m 0.006 spans 60 working voxels (condition.working_voxel_m 0.0001), at most 8: each "
+         "neighbourhood would hold ~11310 points and the memory grows with that; raise condition.working_voxel_m "
+         "to at least 0.00075 or lower smooth.radius_m"),
+        ({"smooth": {"enabled": False}, "condition": {"voxel_m": 0.0001, "working_voxel_m": 0.0001}},
+         "normals.radius_m 0.006 spans 60 working voxels"),
+        ({"descriptor": {"radius_m": 0.002}},
+         "descriptor.radius_m 0.002 is below condition.working_voxel_m 0.0025: the neighbourhood would hold no "
+         "neighbours"),
+        ({"boundary": {"radius_m": 0.021}}, "boundary.radius_m 0.021 spans 8.4 working voxels"),
+        ({"grid": {"leaf_m": 0}}, "grid.leaf_m must be above 0, got 0.0"),
+        ({"condition": {"voxel_m": 0.0}}, "condition.voxel_m must be above 0, got 0.0"),
+        ({"order": {"link_m": 0.002}}, "order.link_m 0.002 is below grid.leaf_m 0.003"),
+        ({"resample": {"spacing_m": 0.00005}}, "resample.spacing_m 5e-05 is below 0.0001 m"),
+    ],
+)
+def test_parameters_that_cannot_work_together_are_refused_naming_the_key(overrides, message):
+    with pytest.raises(InputError) as error:
+        effective_config(None, overrides)
+    assert str(error.value).startswith(message)
+
+
+def test_the_relations_allow_the_defaults_and_their_limits():
+    effective_config(None, {})
+    limits = {"condition": {"voxel_m": 0.00075, "working_voxel_m": 0.00075},
+              **{section: {"radius_m": 0.006} for section in ("smooth", "normals", "descriptor", "boundary")},
+              "thinning": {"radius_m": 0.00075}, "segment": {"cluster_tolerance_m": 0.006},
+              "order": {"link_m": 0.003}, "resample": {"spacing_m": 0.0001}}
+    config = effective_config(None, limits)
+    assert config.normals.radius_m == 8 * config.condition.working_voxel_m

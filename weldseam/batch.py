@@ -29,6 +29,7 @@ from pathlib import Path
 from weldseam.batch_workers import StopSignals, WorkerDied, run_in_processes
 from weldseam.errors import InputError, NoSeamError, WeldseamError
 from weldseam.io.atomic import atomic_write
+from weldseam.io.sidecars import sidecars
 
 SCAN_SUFFIXES = (".ply", ".pcd", ".xyz", ".txt", ".npy", ".png")
 STATE_FILE = ".weldseam-batch.json"
@@ -116,20 +117,6 @@ def _is_scan(path: Path) -> bool:
     return path.suffix.lower() in SCAN_SUFFIXES and not path.name.startswith(".")
 
 
-def sidecars(scan: Path) -> tuple[Path | None, Path | None]:
-    """(intrinsics, camera pose) files for `scan` by the documented convention, or None."""
-    stem = scan.name[: -len(scan.suffix)] if scan.suffix else scan.name
-    intrinsics = None
-    if scan.suffix.lower() == ".png":
-        candidates = [scan.with_name(f"{stem}.intrinsics.json"), scan.with_name("intrinsics.json")]
-        intrinsics = next((path for path in candidates if path.is_file()), None)
-        if intrinsics is None:
-            others = sorted(scan.parent.glob("*.intrinsics.json"))
-            intrinsics = others[0] if len(others) == 1 else None
-    pose = next((p for p in (scan.with_name(f"{stem}.pose.json"), scan.with_name("pose.json")) if p.is_file()), None)
-    return intrinsics, pose
-
-
 def make_jobs(
     scans: list[Path],
     out_dir: Path,
@@ -178,17 +165,6 @@ def make_jobs(
     return jobs
 
 
-def _camera_pose(job: BatchJob):
-    """T_base_camera (4, 4) from the scan's pose sidecar (camera pose, flange pose or joints) and the
-    hand-eye file, or None when neither places the camera."""
-    from weldseam.io.hand_eye import camera_pose, read_hand_eye
-    from weldseam.io.poses import read_pose_file
-
-    pose = read_pose_file(job.camera_pose) if job.camera_pose else None
-    hand_eye = read_hand_eye(job.hand_eye) if job.hand_eye else None
-    return camera_pose(pose, hand_eye)[0]
-
-
 def _file_digest(path: Path) -> bytes:
     try:
         return hashlib.sha256(path.read_bytes()).digest()
@@ -202,18 +178,16 @@ def run_job(job: BatchJob) -> JobResult:
     try:
         from weldseam.config import PlanConfig, with_overrides
         from weldseam.io.paths import write_paths
-        from weldseam.io.scan import load_scan
+        from weldseam.io.placement import PlacementOptions, place_scans, with_placement
         from weldseam.pipeline.run import plan_paths
 
-        scan, notes = load_scan(
-            job.scan_file,
-            intrinsics_path=job.intrinsics,
-            T_base_camera=_camera_pose(job),
-            cloud_frame=job.cloud_frame,
-            units=job.units,
-        )
-        scan = replace(scan, source=job.scan)  # recorded and reported as the user named it
+        placed = place_scans(PlacementOptions(
+            (job.scan_file,), intrinsics=job.intrinsics, camera_pose=job.camera_pose, hand_eye=job.hand_eye,
+            cloud_frame=job.cloud_frame, units=job.units,
+        ))
+        scan = replace(placed.frames[0], source=job.scan)  # recorded and reported as the user named it
         result = plan_paths(scan, with_overrides(PlanConfig(), job.params), allow_empty=job.allow_empty)
+        result = with_placement(result, placed)  # the frame, the placement and its warnings, as plan records them
         Path(job.output).parent.mkdir(parents=True, exist_ok=True)
         write_paths(result, job.output, fmt=job.fmt, rotation=job.rotation)
         return JobResult(
@@ -223,7 +197,7 @@ def run_job(job: BatchJob) -> JobResult:
             len(result.paths),
             round(sum(p.length_m for p in result.paths), 6),
             round(time.perf_counter() - started, 3),
-            warnings=tuple(dict.fromkeys([*notes, *result.warnings])),
+            warnings=tuple(dict.fromkeys(result.warnings)),
         )
     except NoSeamError as error:
         status, message = "no-seam", str(error)

@@ -180,6 +180,26 @@ class ResampleConfig:
     smoothing_m: float = _param(0.003, "Gaussian sigma (arc length) that smooths seam points before resampling")
 
 
+DIRECTION_RULES = ("+x", "-x", "+y", "-y", "+z", "-z", "away-from-robot", "toward-robot", "start-point")
+
+
+@dataclass(frozen=True)
+class DirectionConfig:
+    rule: str = _param(
+        "+x",
+        "travel direction: along a base axis (+x -x +y -y +z -z), away-from-robot or toward-robot (the base "
+        "origin), or start-point (start nearest start_m); see weldseam/pipeline/direction.py",
+        DIRECTION_RULES,
+    )
+    start_m: tuple[float, float, float] | None = _param(
+        None, "rule start-point: each seam starts at the end (a closed seam at the pose) nearest this point"
+    )
+    closed_sense: str = _param(
+        "ccw", "a closed seam turns counter-clockwise (ccw) or clockwise (cw) seen from the rule's direction",
+        ("ccw", "cw"),
+    )
+
+
 @dataclass(frozen=True)
 class OutputConfig:
     format: str = _param(
@@ -211,6 +231,7 @@ class PlanConfig:
     extend: ExtendConfig = field(default_factory=ExtendConfig)
     split: SplitConfig = field(default_factory=SplitConfig)
     resample: ResampleConfig = field(default_factory=ResampleConfig)
+    direction: DirectionConfig = field(default_factory=DirectionConfig)
     output: OutputConfig = field(default_factory=OutputConfig)
 
 
@@ -334,11 +355,88 @@ def read_config_file(path: str | Path) -> dict[str, dict]:
 
 
 def effective_config(config_file: str | Path | None, overrides: dict[str, dict]) -> PlanConfig:
-    """Defaults, then the config file, then command-line overrides (the last one wins)."""
+    """Defaults, then the config file, then command-line overrides (the last one wins); the
+    result must pass `check_relations`."""
     config = PlanConfig()
     if config_file is not None:
         config = with_overrides(config, read_config_file(config_file))
-    return with_overrides(config, overrides)
+    config = with_overrides(config, overrides)
+    check_relations(config)
+    return config
+
+
+# Sizes that divide space into cells or neighbourhoods: zero would mean infinitely many.
+POSITIVE_KEYS = (
+    "condition.voxel_m", "condition.working_voxel_m", "merge.icp_voxel_m", "merge.dedup_voxel_m",
+    "smooth.radius_m", "normals.radius_m", "descriptor.radius_m", "segment.cluster_tolerance_m",
+    "boundary.radius_m", "thinning.radius_m", "grid.leaf_m", "order.link_m", "section.half_width_m",
+    "section.slab_m", "joints.face_radius_m", "extend.step_m", "resample.spacing_m",
+)
+# Radii of neighbourhoods in the working cloud (points condition.working_voxel_m apart).
+WORKING_RADIUS_KEYS = (
+    "smooth.radius_m", "normals.radius_m", "descriptor.radius_m", "segment.cluster_tolerance_m",
+    "boundary.radius_m", "thinning.radius_m",
+)
+# A neighbourhood of r / working voxel = k holds up to ~pi k^2 points of a surface (8: ~200), so
+# memory grows with the number of working points (at most the input's), not with the
+# parameters: 1.5 GB for the 189k-point v_butt sample at k = 8 (0.75 mm voxels), 0.17 GB at the
+# defaults (k = 2.4). The automatic threshold's synthetic crease has (6 k)^2 points of pi k^2
+# neighbours each: 0.5 million pairs at 8; the 0.0001 m working voxel that used 24 GB was k = 60.
+MAX_RADIUS_VOXELS = 8.0
+MIN_SPACING_M = 0.0001  # resample smooths with a (K, K) matrix of K = seam length / spacing knots
+
+
+def check_relations(config: PlanConfig) -> None:
+    """Refuse parameters that cannot work together, before any data is read: InputError naming
+    the key. Sizes in POSITIVE_KEYS > 0; condition.working_voxel_m >= condition.voxel_m; each
+    radius of WORKING_RADIUS_KEYS (in use) between 1 and MAX_RADIUS_VOXELS working voxels;
+    order.link_m >= grid.leaf_m; direction.start_m with rule start-point only;
+    resample.spacing_m >= MIN_SPACING_M."""
+
+    def value(key: str) -> float:
+        section, name = key.split(".")
+        return getattr(getattr(config, section), name)
+
+    for key in POSITIVE_KEYS:
+        if value(key) <= 0:
+            raise InputError(f"{key} must be above 0, got {value(key)!r}")
+    voxel, working = value("condition.voxel_m"), value("condition.working_voxel_m")
+    if working < voxel:
+        raise InputError(
+            f"condition.working_voxel_m {working:g} is below condition.voxel_m {voxel:g}: the working cloud "
+            "coarsens the fine one, so its voxel must be at least as large"
+        )
+    for key in WORKING_RADIUS_KEYS:
+        if key == "smooth.radius_m" and not config.smooth.enabled:
+            continue
+        radius = value(key)
+        if radius < working:
+            raise InputError(
+                f"{key} {radius:g} is below condition.working_voxel_m {working:g}: the neighbourhood would hold "
+                "no neighbours"
+            )
+        if radius > MAX_RADIUS_VOXELS * working:
+            raise InputError(
+                f"{key} {radius:g} spans {radius / working:.3g} working voxels (condition.working_voxel_m "
+                f"{working:g}), at most {MAX_RADIUS_VOXELS:g}: each neighbourhood would hold ~"
+                f"{math.pi * (radius / working) ** 2:.0f} points and the memory grows with that; raise "
+                f"condition.working_voxel_m to at least {radius / MAX_RADIUS_VOXELS:g} or lower {key}"
+            )
+    if value("order.link_m") < value("grid.leaf_m"):
+        raise InputError(
+            f"order.link_m {value('order.link_m'):g} is below grid.leaf_m {value('grid.leaf_m'):g}: "
+            "neighbouring grid nodes could never be linked"
+        )
+    if (config.direction.rule == "start-point") != (config.direction.start_m is not None):
+        raise InputError(
+            "direction.start_m must be given with direction.rule start-point, and only then "
+            f"(rule {config.direction.rule}, start_m {config.direction.start_m})"
+        )
+    if value("resample.spacing_m") < MIN_SPACING_M:
+        raise InputError(
+            f"resample.spacing_m {value('resample.spacing_m'):g} is below {MIN_SPACING_M:g} m: finer than any "
+            "torch needs, and the smoothing's memory grows with the square of the pose count"
+        )
 
 
 def config_to_toml(config: PlanConfig) -> str:

@@ -35,21 +35,28 @@ class Intrinsics:
     depth_scale: float = 1000.0
 
 
+FRAMES = ("base", "camera")
+
+
 @dataclass(frozen=True)
 class Scan:
-    """A point cloud in the base frame, with where the camera was (to orient normals).
+    """A point cloud in the base frame (or the camera frame, when nothing placed the camera),
+    with where the camera was (to orient normals).
 
-    points_m: (N, 3) base-frame points in metres.
-    camera_origin_m: (3,) camera centre in the base frame, or (N, 3) one per point (frames
+    points_m: (N, 3) points in metres, in `frame`.
+    camera_origin_m: (3,) camera centre in that frame, or (N, 3) one per point (frames
         merged from several views: the camera that saw each point), or None when unknown.
     source: the file it came from ("-" for stdin), for messages and the output record.
     sha256: hex digest of the input bytes, recorded in the output.
+    frame: "base" (the robot base) or "camera" (camera-frame data without a camera pose: a
+        path planned on it is in the camera frame too).
     """
 
     points_m: np.ndarray
     camera_origin_m: np.ndarray | None = None
     source: str = ""
     sha256: str = ""
+    frame: str = "base"
 
 
 @dataclass(frozen=True)

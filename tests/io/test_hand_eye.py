@@ -1,6 +1,7 @@
 """weldseam.io.hand_eye: the hand-eye file and the camera pose from the robot state."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -29,7 +30,7 @@ def test_eye_in_hand_composes_flange_and_hand_eye(tmp_path):
     path = write(tmp_path, {"setup": "eye-in-hand", "T_flange_camera": hand.tolist(), "residuals": [1]})
     calibration = read_hand_eye(path)
     flange = pose_vector_matrix(np.array([0.4, -0.1, 0.5, 0.0, np.pi, 0.0]), "x")
-    pose, notes = camera_pose(FramePose("f", flange_pose=flange), calibration, forward=None)
+    pose, notes = camera_pose(FramePose("f", flange_pose=flange), calibration)
     np.testing.assert_allclose(pose, flange @ hand, atol=1e-12)
     assert notes == []
 
@@ -37,8 +38,8 @@ def test_eye_in_hand_composes_flange_and_hand_eye(tmp_path):
 def test_eye_to_hand_needs_no_robot_state_and_says_so(tmp_path):
     fixed = transform([170, 0, 10], [0.5, 0.0, 0.8])
     calibration = read_hand_eye(write(tmp_path, {"setup": "eye-to-hand", "T_base_camera": fixed.tolist()}))
-    np.testing.assert_array_equal(camera_pose(None, calibration, forward=None)[0], fixed)
-    pose, notes = camera_pose(FramePose("--joints", joints_rad=np.zeros(6)), calibration, forward=None)
+    np.testing.assert_array_equal(camera_pose(None, calibration)[0], fixed)
+    pose, notes = camera_pose(FramePose("--joints", joints_rad=np.zeros(6)), calibration)
     np.testing.assert_array_equal(pose, fixed)
     assert len(notes) == 1 and "not needed" in notes[0]
 
@@ -61,12 +62,12 @@ def test_bad_files_name_the_file_and_the_key(tmp_path, data, problem):
 
 def test_robot_state_without_hand_eye_and_camera_pose_with_it_are_refused(tmp_path):
     with pytest.raises(InputError, match="need a hand-eye file"):
-        camera_pose(FramePose("--joints", joints_rad=np.zeros(6)), None, forward=None)
+        camera_pose(FramePose("--joints", joints_rad=np.zeros(6)), None)
     calibration = read_hand_eye(write(tmp_path, {"setup": "eye-in-hand", "T_flange_camera": np.eye(4).tolist()}))
     with pytest.raises(InputError, match="give one or the other"):
-        camera_pose(FramePose("pose.json", T_base_camera=np.eye(4)), calibration, forward=None)
+        camera_pose(FramePose("pose.json", T_base_camera=np.eye(4)), calibration)
     with pytest.raises(InputError, match="needs the robot state"):
-        camera_pose(None, calibration, forward=None)
+        camera_pose(None, calibration)
 
 
 def test_the_one_pose_format_reads_each_kind(tmp_path):
@@ -77,7 +78,7 @@ def test_the_one_pose_format_reads_each_kind(tmp_path):
              "joints_rad": [0.0, -1.5, 1.5, -1.5, -1.5, 0.0]}
     for key, value in kinds.items():
         path = tmp_path / f"{key}.json"
-        path.write_text(json.dumps({key: value, "comment": "ignored"}))
+        path.write_text(json.dumps({key: value}))
         pose = read_pose_file(path)
         assert pose.source == str(path)
         if key == "T_base_camera":
@@ -103,3 +104,68 @@ def test_bad_pose_files_name_the_file_and_the_key(tmp_path, data, problem):
     with pytest.raises(InputError) as info:
         read_pose_file(path)
     assert str(info.value).startswith(f"{path}: ") and problem in str(info.value)
+
+
+def test_a_hand_eye_file_rounded_to_6_decimals_is_accepted_like_a_pose_file(tmp_path):
+    from weldseam.io.poses import read_camera_pose
+
+    exact = read_camera_pose(Path(__file__).resolve().parents[2] / "samples" / "v_butt.pose.json")
+    rounded = np.round(exact, 6).tolist()  # |R^T R - I| = 1.05e-6
+    calibration = read_hand_eye(write(tmp_path, {"setup": "eye-in-hand", "T_flange_camera": rounded}))
+    pose_path = tmp_path / "pose.json"
+    pose_path.write_text(json.dumps({"T_base_camera": rounded}))
+    np.testing.assert_array_equal(calibration.transform, read_camera_pose(pose_path))
+    np.testing.assert_allclose(calibration.transform, exact, atol=2e-6)
+    off = np.round(exact, 6)
+    off[:3, :3] *= 1.001
+    with pytest.raises(InputError, match="rotation is not orthonormal"):
+        read_hand_eye(write(tmp_path, {"setup": "eye-in-hand", "T_flange_camera": off.tolist()}))
+
+
+def test_joint_angles_use_the_robot_the_pose_file_names(tmp_path):
+    from weldseam.io.poses import read_pose_file
+    from weldseam.robot.kinematics import ROBOTS, forward
+
+    hand = transform([1, 2, 3], [0.03, -0.05, 0.06])
+    calibration = read_hand_eye(write(tmp_path, {"setup": "eye-in-hand", "T_flange_camera": hand.tolist()}))
+    joints = [0.3, -1.2, 1.4, -1.7, -1.5, 0.2]
+    for robot in ("ur5", "ur5e", "ur10"):
+        path = tmp_path / f"{robot}.pose.json"
+        path.write_text(json.dumps({"joints_rad": joints, "robot": robot}))
+        pose, _ = camera_pose(read_pose_file(path), calibration)
+        np.testing.assert_allclose(pose, forward(ROBOTS[robot], np.array(joints)) @ hand, atol=1e-12)
+        np.testing.assert_allclose(camera_pose(read_pose_file(path), calibration, robot)[0], pose, atol=0)
+    unnamed = tmp_path / "pose.json"
+    unnamed.write_text(json.dumps({"joints_rad": joints}))
+    ur10, _ = camera_pose(read_pose_file(unnamed), calibration, "ur10")  # plan --robot ur10
+    np.testing.assert_allclose(ur10, forward(ROBOTS["ur10"], np.array(joints)) @ hand, atol=1e-12)
+    ur5, _ = camera_pose(read_pose_file(unnamed), calibration)  # the default
+    np.testing.assert_allclose(ur5, forward(ROBOTS["ur5"], np.array(joints)) @ hand, atol=1e-12)
+    assert np.abs(ur10[:3, 3] - ur5[:3, 3]).max() > 0.05  # the models differ: the choice matters
+    with pytest.raises(InputError) as info:
+        camera_pose(read_pose_file(tmp_path / "ur5e.pose.json"), calibration, "ur10")
+    assert str(info.value) == f'{tmp_path / "ur5e.pose.json"}: "robot" is ur5e but --robot is ur10: give one'
+
+
+def test_the_robot_names_are_the_kinematic_models():
+    from weldseam.io.poses import ROBOT_NAMES
+    from weldseam.robot.kinematics import ROBOTS
+
+    assert set(ROBOT_NAMES) == set(ROBOTS)
+
+
+@pytest.mark.parametrize("data, problem", [
+    ({"joints_rad": [0] * 6, "robot": "ur3"}, "robot must be one of ur5, ur5e, ur10, got 'ur3'"),
+    ({"joints_rad": [0] * 6, "robto": "ur10"}, 'unknown key "robto" (allowed: "T_base_camera", "flange_pose", '
+                                               '"joints_rad", "robot")'),
+    ({"T_base_camera": np.eye(4).tolist(), "comment": "x"}, 'unknown key "comment" (allowed: "T_base_camera", '
+                                                          '"flange_pose", "joints_rad", "robot")'),
+])
+def test_unknown_keys_and_robots_are_refused_naming_the_file(tmp_path, data, problem):
+    from weldseam.io.poses import read_pose_file
+
+    path = tmp_path / "pose.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(InputError) as info:
+        read_pose_file(path)
+    assert str(info.value) == f"{path}: {problem}"

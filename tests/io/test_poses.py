@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,6 +12,9 @@ from scipy.spatial.transform import Rotation
 
 from weldseam.errors import InputError
 from weldseam.io.poses import parse_vector, read_camera_pose
+
+
+SAMPLES = Path(__file__).resolve().parents[2] / "samples"
 
 
 def pose_file(tmp_path, matrix, key="T_base_camera"):
@@ -69,7 +73,7 @@ def test_unreadable_files(tmp_path):
      r"T_base_camera last row must be \[0, 0, 0, 1\], got \[0\.0, 0\.0, 0\.5, 1\.0\]"),
     ({"T_base_camera": [[1.001, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]},
      r"T_base_camera rotation is not orthonormal \(max \|R\^T R - I\| = 2\.00e-03, "
-     r"tolerance 1e-06\)"),
+     r"tolerance 1e-04\)"),
     ({"T_base_camera": [[-1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]},
      r"T_base_camera rotation has det -1 \(a reflection, not a rotation\)"),
 ])
@@ -79,9 +83,26 @@ def test_invalid_pose(tmp_path, content, problem):
     expect_error(path, problem)
 
 
-def test_rotation_within_tolerance_is_accepted(tmp_path, transform):
-    transform[:3, :3] *= 1 + 4e-7
+def test_a_matrix_rounded_to_6_decimals_is_accepted_and_made_a_rotation(tmp_path):
+    transform = read_camera_pose(SAMPLES / "v_butt.pose.json")
+    rounded = np.round(transform, 6)
+    assert np.abs(rounded[:3, :3].T @ rounded[:3, :3] - np.eye(3)).max() > 1e-6  # 1.05e-6: refused before
+    read = read_camera_pose(pose_file(tmp_path, rounded))
+    np.testing.assert_allclose(read[:3, :3].T @ read[:3, :3], np.eye(3), atol=1e-14)
+    np.testing.assert_allclose(read, transform, atol=2e-6)
+    np.testing.assert_array_equal(read[:3, 3], rounded[:3, 3])
+
+
+def test_an_orthonormal_matrix_is_kept_bit_for_bit(tmp_path, transform):
     np.testing.assert_array_equal(read_camera_pose(pose_file(tmp_path, transform)), transform)
+    nine = np.round(transform, 9)  # as weldseam writes a record
+    np.testing.assert_array_equal(read_camera_pose(pose_file(tmp_path, nine)), nine)
+
+
+def test_a_rotation_beyond_the_tolerance_is_refused(tmp_path, transform):
+    transform[:3, :3] *= 1 + 1e-4  # |R^T R - I| = 2e-4
+    expect_error(pose_file(tmp_path, transform), r"T_base_camera rotation is not orthonormal \(max \|R\^T R - I\| = "
+                 r"2\.00e-04, tolerance 1e-04\)")
 
 
 @pytest.mark.parametrize("text, expected", [

@@ -34,3 +34,42 @@ def atomic_write(path: str | Path, data: bytes) -> None:
         if isinstance(error, OSError):
             raise InputError(f"{path}: cannot write ({error.strerror or error})") from None
         raise
+
+
+def check_writable(path: str | Path) -> None:
+    """Raise InputError unless a new file can be written at `path`, by creating and removing
+    a temporary file beside it: a missing folder, a file in the folder's place, permissions
+    and a read-only file system all show before any work is done. An existing `path` is
+    fine (it will be replaced) unless it is a folder."""
+    path = Path(path)
+    if path.is_dir():
+        raise InputError(f"{path}: is a folder, not a file name")
+    folder = path.parent
+    if not folder.exists():
+        raise InputError(f"{path}: the folder {folder} does not exist")
+    if not folder.is_dir():
+        raise InputError(f"{path}: {folder} is a file, not a folder")
+    _probe(folder, path)
+
+
+def prepare_folder(path: str | Path) -> None:
+    """Create the folder `path` (and its parents) if needed and check that files can be written
+    in it; InputError naming it otherwise (e.g. a file in its place)."""
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise InputError(f"{path}: is a file, not a folder")
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise InputError(f"{path}: cannot create the folder ({error.strerror or error})") from None
+    _probe(path, path)
+
+
+def _probe(folder: Path, name: Path) -> None:
+    """Create and remove a temporary file in `folder`; InputError naming `name` when that fails."""
+    probe = folder / f".weldseam-probe-{secrets.token_hex(4)}.tmp"
+    try:
+        os.close(os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
+    except OSError as error:
+        raise InputError(f"{name}: cannot write in {folder} ({error.strerror or error})") from None
+    probe.unlink(missing_ok=True)

@@ -40,8 +40,11 @@ def read_depth_png(path: str | Path) -> np.ndarray:
 def read_intrinsics(path: str | Path) -> Intrinsics:
     """Read `{"width","height","fx","fy","cx","cy","depth_scale"}` (RealSense `ppx`/`ppy`
     accepted for cx/cy). depth_scale is depth units per metre: 1000 for 1 mm units."""
-    path = Path(path)
-    data = read_json(path, "an intrinsics file")
+    return intrinsics_from_json(read_json(path, "an intrinsics file"), str(path))
+
+
+def intrinsics_from_json(data, path: str) -> Intrinsics:
+    """Intrinsics from a parsed intrinsics object (see read_intrinsics); `path` starts each error."""
     if not isinstance(data, dict):
         raise InputError(f"{path}: intrinsics must be a JSON object")
     data = dict(data)

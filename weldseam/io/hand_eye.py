@@ -10,7 +10,6 @@ T_base_camera (eye-to-hand: the robot state is not needed).
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -18,7 +17,7 @@ import numpy as np
 
 from weldseam.errors import InputError
 from weldseam.io.files import read_json
-from weldseam.io.poses import FramePose, rigid_transform
+from weldseam.io.poses import DEFAULT_ROBOT, FramePose, rigid_transform
 
 SETUP_KEYS = {"eye-in-hand": "T_flange_camera", "eye-to-hand": "T_base_camera"}
 
@@ -48,14 +47,16 @@ def read_hand_eye(path: str | Path) -> HandEye:
 
 
 def camera_pose(
-    pose: FramePose | None, hand_eye: HandEye | None, forward: Callable[[np.ndarray], np.ndarray] | None = None
+    pose: FramePose | None, hand_eye: HandEye | None, robot: str | None = None
 ) -> tuple[np.ndarray | None, list[str]]:
     """T_base_camera (4, 4) of a frame, or None when neither says where the camera was, and
     notes for the user.
 
-    pose: the frame's pose (camera pose, flange pose or joints); forward: joints (6,) rad ->
-    T_base_flange (4, 4), the arm's forward kinematics (default: the UR5's). A camera pose and a hand-eye file
-    together, or a robot state without a hand-eye file, raise InputError.
+    pose: the frame's pose (camera pose, flange pose or joints); robot: the arm the joint
+    angles are of (`plan --robot`), else the pose's own "robot", else DEFAULT_ROBOT (UR5);
+    T_base_flange is its forward kinematics. A camera pose and a hand-eye file together, a
+    robot state without a hand-eye file, or a --robot that contradicts the pose's "robot"
+    raise InputError.
     """
     if pose is not None and pose.T_base_camera is not None:
         if hand_eye is not None:
@@ -76,12 +77,23 @@ def camera_pose(
         raise InputError(
             f"{hand_eye.source}: an eye-in-hand camera needs the robot state: --flange-pose or --joints"
         )
-    flange = pose.flange_pose if pose.flange_pose is not None else (forward or _ur5_flange)(pose.joints_rad)
-    return flange @ hand_eye.transform, []
+    if pose.flange_pose is not None:
+        return pose.flange_pose @ hand_eye.transform, []
+    return flange_of_joints(pose.joints_rad, joints_robot(pose, robot)) @ hand_eye.transform, []
 
 
-def _ur5_flange(joints_rad: np.ndarray) -> np.ndarray:
-    """T_base_flange (4, 4) of UR5 joint angles (6,) rad."""
+def joints_robot(pose: FramePose, robot: str | None) -> str:
+    """The robot model of a pose's joint angles: --robot, else the pose's "robot", else UR5;
+    InputError when the two are given and differ."""
+    if robot is not None and pose.robot is not None and robot != pose.robot:
+        raise InputError(f'{pose.source}: "robot" is {pose.robot} but --robot is {robot}: give one')
+    return robot or pose.robot or DEFAULT_ROBOT
+
+
+def flange_of_joints(joints_rad: np.ndarray, robot: str) -> np.ndarray:
+    """T_base_flange (4, 4) of joint angles (6,) rad by the forward kinematics of `robot`."""
     from weldseam.robot.kinematics import ROBOTS, forward
 
-    return forward(ROBOTS["ur5"], joints_rad)
+    if robot not in ROBOTS:
+        raise InputError(f"--robot must be one of {', '.join(ROBOTS)}, got {robot!r}")
+    return forward(ROBOTS[robot], joints_rad)

@@ -34,28 +34,33 @@ FORMATS = ("json", "csv")
 def format_path_json(result: RunResult) -> bytes:
     """The paths of `result` as a UTF-8 `weldseam.path` JSON document (2-space indent).
 
-    Keys: format, version, frame ("base"), units ("m"), input and params (from
-    result.record), timings_s, warnings, candidates (every seam candidate: centre, length, the
-    seam it became or why it was rejected), seams (id, closed, joint, confidence, length_m,
-    poses of x y z qx qy qz qw rx ry rz). Quaternions are hemisphere-continuous along
-    each seam, rotation vectors have angle <= pi.
+    Keys: format, version, frame (result.record["frame"]: "base", or "camera" for a scan
+    that nothing placed), units ("m"), input and params (from result.record), timings_s,
+    warnings, candidates (every seam candidate: centre, length, the seam it became or why it
+    was rejected), seams (id, closed, joint, confidence, length_m, poses of x y z qx qy qz qw
+    rx ry rz). Quaternions are hemisphere-continuous along each seam, rotation vectors have
+    angle <= pi. Input and params are written exactly (each float as the shortest text that
+    reads back to it), so that they place and plan a rerun bit for bit the same; the rest is
+    rounded to DECIMALS.
     """
-    document = _rounded({
+    document = {
         "format": "weldseam.path",
         "version": __version__,
-        "frame": "base",
+        "frame": result.record.get("frame", "base"),
         "units": "m",
-        "input": result.record.get("input", {}),
-        "params": result.record.get("params", {}),
-        "timings_s": result.timings_s,
-        "warnings": list(result.warnings),
-        "candidates": result.record.get("candidates", []),
-        "seams": [
-            {"id": path.seam_id, "closed": bool(path.closed), "joint": path.joint,
-             "confidence": path.confidence, "length_m": path.length_m}
-            for path in result.paths
-        ],
-    })
+        "input": _plain(result.record.get("input", {})),
+        "params": _plain(result.record.get("params", {})),
+        **_rounded({
+            "timings_s": result.timings_s,
+            "warnings": list(result.warnings),
+            "candidates": result.record.get("candidates", []),
+            "seams": [
+                {"id": path.seam_id, "closed": bool(path.closed), "joint": path.joint,
+                 "confidence": path.confidence, "length_m": path.length_m}
+                for path in result.paths
+            ],
+        }),
+    }
     for seam, path in zip(document["seams"], result.paths):
         seam["poses"] = [dict(zip(POSE_KEYS, row)) for row in _pose_table(path).tolist()]
     text = json.dumps(document, indent=2, ensure_ascii=False, allow_nan=False)
@@ -98,10 +103,23 @@ def write_paths(
         fmt the format is CSV.
     rotation: CSV rotation columns, "rotvec" or "quat" (JSON always has both).
     """
-    to_stdout = str(out) == "-"
+    fmt = path_format(out, fmt)
+    _rotation_columns(rotation)
+    data = format_path_json(result) if fmt == "json" else format_path_csv(result, rotation)
+    if str(out) == "-":
+        stream = stdout or sys.stdout.buffer
+        stream.write(data)
+        stream.flush()
+    else:
+        atomic_write(out, data)
+
+
+def path_format(out: str | Path, fmt: str | None = None) -> str:
+    """The format ("json" or "csv") a path file `out` is written in: `fmt`, else its extension
+    (CSV for "-", stdout). InputError for anything else, so it can be checked before a run."""
     if fmt is None:
         suffix = Path(out).suffix.lower()
-        fmt = "csv" if to_stdout else suffix[1:]
+        fmt = "csv" if str(out) == "-" else suffix[1:]
         if fmt not in FORMATS:
             raise InputError(
                 f"{out}: unknown path file format {suffix or '(no extension)'!r} "
@@ -109,14 +127,7 @@ def write_paths(
             )
     if fmt not in FORMATS:
         raise InputError(f"format: expected one of {', '.join(FORMATS)}, got {fmt!r}")
-    _rotation_columns(rotation)
-    data = format_path_json(result) if fmt == "json" else format_path_csv(result, rotation)
-    if to_stdout:
-        stream = stdout or sys.stdout.buffer
-        stream.write(data)
-        stream.flush()
-    else:
-        atomic_write(out, data)
+    return fmt
 
 
 def read_paths(path: str | Path) -> list[WeldPath]:
@@ -158,6 +169,20 @@ def _pose_table(path: WeldPath) -> np.ndarray:
     if not np.isfinite(table).all():
         raise ValueError(f"seam {path.seam_id}: the path has NaN or infinite poses")
     return np.round(table, DECIMALS) + 0.0
+
+
+def _plain(value):
+    """`value` as plain JSON data (numpy arrays and scalars converted, tuples to lists), floats
+    unchanged but -0.0 made 0.0."""
+    if isinstance(value, dict):
+        return {str(key): _plain(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [_plain(item) for item in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float):
+        return value + 0.0
+    return value
 
 
 def _rounded(value):

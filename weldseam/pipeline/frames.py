@@ -16,6 +16,21 @@ from weldseam.pipeline.run import Dump, plan_paths, timed_step
 from weldseam.types import RunResult, Scan
 
 
+def merged_scan(frames: Sequence[Scan], config: PlanConfig, *, source: str) -> tuple[Scan, object]:
+    """(the merged Scan, the merge's result) of several frames of one workpiece, each in the base
+    frame with its (3,) camera origin (merge.merge_frames)."""
+    if any(frame.camera_origin_m is None for frame in frames):
+        raise InputError(f"{source}: every frame needs its pose to be merged with the others")
+    m = config.merge
+    merged = merge_frames(
+        [frame.points_m for frame in frames], np.array([frame.camera_origin_m for frame in frames]),
+        dedup_voxel_m=m.dedup_voxel_m, icp_voxel_m=m.icp_voxel_m, icp_max_distance_m=m.icp_max_distance_m,
+        min_overlap=m.min_overlap, max_incidence_deg=m.max_incidence_deg, refine=m.refine,
+    )
+    digest = hashlib.sha256("".join(frame.sha256 for frame in frames).encode()).hexdigest()
+    return Scan(points_m=merged.points_m, camera_origin_m=merged.camera_origins_m, source=source, sha256=digest), merged
+
+
 def plan_frames(
     frames: Sequence[Scan],
     config: PlanConfig,
@@ -32,20 +47,12 @@ def plan_frames(
     scans)."""
     from scipy.spatial.transform import Rotation
 
-    if any(frame.camera_origin_m is None for frame in frames):
-        raise InputError(f"{source}: every frame needs its pose to be merged with the others")
     m = config.merge
     spent: dict[str, float] = {}
     with timed_step("merge", spent, on_stage):
-        merged = merge_frames(
-            [frame.points_m for frame in frames], np.array([frame.camera_origin_m for frame in frames]),
-            dedup_voxel_m=m.dedup_voxel_m, icp_voxel_m=m.icp_voxel_m, icp_max_distance_m=m.icp_max_distance_m,
-            min_overlap=m.min_overlap, max_incidence_deg=m.max_incidence_deg, refine=m.refine,
-        )
+        scan, merged = merged_scan(frames, config, source=source)
     if dump is not None:
         dump("merge", merged.points_m, merged.frame.astype(np.float64))
-    digest = hashlib.sha256("".join(frame.sha256 for frame in frames).encode()).hexdigest()
-    scan = Scan(points_m=merged.points_m, camera_origin_m=merged.camera_origins_m, source=source, sha256=digest)
     result = plan_paths(scan, config, dump=dump, on_stage=on_stage, allow_empty=allow_empty)
     warnings = [
         f"{frame.source}: it overlaps the frames before it too little to refine its pose "

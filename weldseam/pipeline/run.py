@@ -21,7 +21,7 @@ from weldseam import __version__
 from weldseam.config import PlanConfig, config_to_dict
 from weldseam.errors import InputError, NoSeamError, StageError, WeldseamError
 from weldseam.pipeline import boundary, candidates, condition, descriptor, extend, grid, join, normals, order
-from weldseam.pipeline import pairing, probe, resample, segment, smooth, split, support, thinning, trace
+from weldseam.pipeline import direction, pairing, probe, resample, segment, smooth, split, support, thinning, trace
 from weldseam.pipeline.candidates import Candidate, Rejection
 from weldseam.pipeline.neighbours import pairs_among, pairs_graph, radius_graph, radius_pairs
 from weldseam.pipeline.parallel import in_background, worker_process
@@ -317,6 +317,11 @@ def _resample(state: PlanState, c: PlanConfig) -> None:
         state.dump("resample", np.vstack([p.positions_m for p in state.paths]), None)
 
 
+def _direction(state: PlanState, c: PlanConfig) -> None:
+    """Each path turned to travel by the user's rule (direction.py)."""
+    state.paths = list(direction.orient_paths(state.paths, c.direction))
+
+
 @dataclass(frozen=True)
 class Step:
     name: str
@@ -342,6 +347,7 @@ STEPS = (
     Step("join", _join),  # extensions may meet
     Step("split", _split),
     Step("resample", _resample),
+    Step("direction", _direction),
 )
 STAGES = tuple(dict.fromkeys(step.name for step in STEPS))  # the timing keys, in order
 
@@ -363,6 +369,29 @@ def timed_step(name: str, timings: dict[str, float], on_stage: Callable[[str], N
         timings[name] = timings.get(name, 0.0) + time.perf_counter() - start
 
 
+def run_steps(
+    scan: Scan,
+    config: PlanConfig,
+    *,
+    last: str | None = None,
+    dump: Dump | None = None,
+    on_stage: Callable[[str], None] | None = None,
+    timings: dict[str, float] | None = None,
+) -> PlanState:
+    """The PlanState after running the steps on `scan`, up to and including the step named `last`
+    (None: all of them), each timed into `timings`. What a step holds open (the worker process)
+    is closed when this returns."""
+    timings = {} if timings is None else timings
+    with ExitStack() as resources:
+        state = PlanState(scan, config, resources, dump or (lambda *_: None))
+        for step in STEPS:
+            with timed_step(step.name, timings, on_stage):
+                step.run(state, config)
+            if step.name == last:
+                break
+    return state
+
+
 def plan_paths(
     scan: Scan,
     config: PlanConfig,
@@ -378,11 +407,7 @@ def plan_paths(
     when nothing is found, unless `allow_empty`.
     """
     timings: dict[str, float] = {name: 0.0 for name in STAGES}
-    with ExitStack() as resources:
-        state = PlanState(scan, config, resources, dump or (lambda *_: None))
-        for step in STEPS:
-            with timed_step(step.name, timings, on_stage):
-                step.run(state, config)
+    state = run_steps(scan, config, dump=dump, on_stage=on_stage, timings=timings)
     found = [*state.short_candidates, *state.chain_candidates]
     if not state.paths and not allow_empty:
         rejected = [c for c in found if c.rejection is not None]
