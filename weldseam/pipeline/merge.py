@@ -63,9 +63,9 @@ class MergedFrames(NamedTuple):
     frame on top of its pose (identity for the reference and unrefined frames); overlap (K,):
     share of each frame's ICP patches that found the surface of another frame (1 for the
     reference); refined (K,) bool; converged: the ICP ended with a step below CONVERGED_M
-    (when it did not, no frame was refined); undetermined (K,): how many of each refined
-    frame's six degrees of freedom the overlaps leave open (kept as its pose gives them);
-    far_side (K,): points of each frame dropped as the far side of a thin wall."""
+    (when it did not, no frame was refined); undetermined (K,): in how many directions of
+    the joint motion that the overlaps leave open (kept as the poses give them) each frame
+    moves; far_side (K,): points of each frame dropped as the far side of a thin wall."""
 
     points_m: np.ndarray
     camera_origins_m: np.ndarray
@@ -184,9 +184,9 @@ def merge_warnings(merged: MergedFrames, sources: Sequence[str], *, min_overlap:
             warnings.append(f"{name}: it overlaps the other frames too little to refine its pose ({overlap:.0%} of "
                             f"its surface, merge.min_overlap {min_overlap:.0%}): its pose is used as given")
         elif open_dof:
-            warnings.append(f"{name}: its overlap with the other frames does not fix {open_dof} of its 6 degrees of "
-                            "freedom (a slide along a prism or a turn about an axis of symmetry): along them its "
-                            "pose is used as given")
+            warnings.append(f"{name}: its overlap with the other frames leaves its pose open in {open_dof} "
+                            f"direction{'s' if open_dof > 1 else ''} (a slide along a prism or a turn about an axis of "
+                            "symmetry): along them its pose is used as given")
     return warnings
 
 
@@ -384,8 +384,8 @@ def _overlap(pairs: list[_Pairs], sources) -> np.ndarray:
 
 def _joint_step(pairs: list[_Pairs], free: np.ndarray, reach_m: float):
     """One Gauss-Newton step of all `free` frames' motions: (F,) (4, 4) motions, the lever
-    (m, the farthest paired point from the centre of rotation) and (F,) how many degrees of
-    freedom of each frame the pairs leave open; None when nothing is paired."""
+    (m, the farthest paired point from the centre of rotation) and (F,) in how many of the
+    directions the pairs leave open each frame moves; None when nothing is paired."""
     residual = np.concatenate([p.residuals for p in pairs]) if pairs else np.zeros(0)
     if len(residual) < 6:
         return None, 0.0, None
@@ -424,10 +424,13 @@ def _joint_step(pairs: list[_Pairs], free: np.ndarray, reach_m: float):
         information += weight @ np.maximum(along * along - NORMAL_NOISE**2 * (velocity * velocity).sum(axis=2), 0.0)
     fixed = information >= MIN_FACING_AREA_M2
     step = directions[:, fixed] @ ((directions[:, fixed].T @ gradient) / curvature[fixed])
-    share = (directions[:, ~fixed] ** 2).reshape(len(free), 6, -1).sum(axis=(1, 2))
+    # How many independent open directions move each frame: the rank of its block of the open
+    # subspace, counting singular values whose square (the share of a direction) is a fifth or more.
+    blocks = directions[:, ~fixed].reshape(len(free), 6, -1)
+    open_dof = [int((np.linalg.svd(block, compute_uv=False) ** 2 >= 0.2).sum()) for block in blocks]
     motions = [_small_motion(part[:3] / lever, part[3:], centre) for part in step.reshape(len(free), 6)]
     radius = np.sqrt(((points - centre) ** 2).sum(axis=1).max())
-    return motions, radius, np.rint(share).astype(int)
+    return motions, radius, np.array(open_dof)
 
 
 def _small_motion(rotation_vector: np.ndarray, translation: np.ndarray, centre: np.ndarray) -> np.ndarray:
