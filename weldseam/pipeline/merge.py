@@ -210,14 +210,9 @@ def _patches(cloud: np.ndarray, origin: np.ndarray, voxel_m: float, max_incidenc
     ])
     # Row -1 of the padded moments is zero: a missing neighbour adds nothing.
     padded = np.vstack([moments, np.zeros((1, moments.shape[1]))])
-    neighbours = np.empty((len(keys), len(NEIGHBOUR_KEYS)), dtype=np.intp)
+    neighbours = _neighbour_voxels(keys)
     block = np.zeros_like(moments)
-    for column, offset in enumerate(NEIGHBOUR_KEYS):
-        wanted = keys + offset
-        index = np.searchsorted(keys, wanted)
-        index[index == len(keys)] = 0
-        index[keys[index] != wanted] = -1
-        neighbours[:, column] = index
+    for index in neighbours.T:
         block += padded[index]
     mean = block[:, 1:4] / block[:, :1]
     first, second = np.array(COVARIANCE_ENTRIES).T
@@ -233,9 +228,29 @@ def _patches(cloud: np.ndarray, origin: np.ndarray, voxel_m: float, max_incidenc
     patch = occupied >= MIN_PATCH_VOXELS
     veil = patch & (np.abs(facing) < np.cos(np.radians(max_incidence_deg)) * np.linalg.norm(rays, axis=1))
     surface = patch & ~veil & (block[:, 0] >= MIN_POINTS_PER_VOXEL * occupied)
-    turn = np.einsum("ij,ikj->ik", normal, np.vstack([normal, normal[:1]])[neighbours])
-    smooth = surface & np.all((turn >= np.cos(np.radians(MAX_PATCH_TURN_DEG))) | (neighbours < 0), axis=1)
+    smooth = surface.copy()
+    rows = np.flatnonzero(surface)
+    turn = np.einsum("ij,ikj->ik", normal[rows], np.vstack([normal, normal[:1]])[neighbours[rows]])
+    smooth[rows] = np.all((turn >= np.cos(np.radians(MAX_PATCH_TURN_DEG))) | (neighbours[rows] < 0), axis=1)
     return Patches(group, point, plane, normal, counts.astype(np.float64), veil, surface, smooth, neighbours)
+
+
+def _neighbour_voxels(keys: np.ndarray) -> np.ndarray:
+    """(V, 27) index into the sorted unique voxel keys `keys` (V,) of the voxels around each
+    (NEIGHBOUR_KEYS order), -1 where there is none. One search per column of 3 voxels along
+    z: in sorted keys, z - 1 and z + 1 sit right before and after the key of z."""
+    found = np.empty((len(keys), len(NEIGHBOUR_KEYS)), dtype=np.intp)
+    padded = np.r_[keys, -1]  # a position past the end reads a key that is never wanted
+    for column in range(0, len(NEIGHBOUR_KEYS), 3):
+        middle = keys + NEIGHBOUR_KEYS[column + 1]
+        at = np.searchsorted(keys, middle)
+        here = padded[at] == middle
+        below = at - 1
+        found[:, column] = np.where((below >= 0) & (padded[below] == middle - 1), below, -1)
+        found[:, column + 1] = np.where(here, at, -1)
+        above = at + here
+        found[:, column + 2] = np.where(padded[above] == middle + 1, above, -1)
+    return found
 
 
 def _convexity(patches: Patches, rows: np.ndarray) -> np.ndarray:
