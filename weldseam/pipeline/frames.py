@@ -11,7 +11,7 @@ import numpy as np
 from weldseam.config import PlanConfig
 from weldseam.errors import InputError
 from weldseam.geometry import transform_points
-from weldseam.pipeline.merge import merge_frames
+from weldseam.pipeline.merge import merge_frames, merge_warnings
 from weldseam.pipeline.run import Dump, plan_paths, timed_step
 from weldseam.types import RunResult, Scan
 
@@ -43,8 +43,8 @@ def plan_frames(
     """Merge several frames of one workpiece (each in the base frame with its (3,) camera
     origin) with `merge_frames`, then run `plan_paths` on the merged cloud. The record's
     input lists the frames with the ICP correction of each (how far it moved the frame's
-    centroid, mm, and its rotation, degrees); `source` names the whole (the manifest, or the
-    scans)."""
+    centroid, mm, and its rotation, degrees), whether it was refined and how many degrees of
+    freedom its overlaps left open; `source` names the whole (the manifest, or the scans)."""
     from scipy.spatial.transform import Rotation
 
     m = config.merge
@@ -54,23 +54,21 @@ def plan_frames(
     if dump is not None:
         dump("merge", merged.points_m, merged.frame.astype(np.float64))
     result = plan_paths(scan, config, dump=dump, on_stage=on_stage, allow_empty=allow_empty)
-    warnings = [
-        f"{frame.source}: it overlaps the frames before it too little to refine its pose "
-        f"({overlap:.0%} of its points, merge.min_overlap {m.min_overlap:.0%}): its pose is used as given"
-        for k, (frame, overlap) in enumerate(zip(frames, merged.overlap))
-        if k > 0 and m.refine and not merged.refined[k]
-    ]
+    warnings = merge_warnings(merged, [frame.source for frame in frames], min_overlap=m.min_overlap, refine=m.refine)
     frames_record = [
         {
             "path": frame.source, "sha256": frame.sha256, "points": int(len(frame.points_m)),
             "kept_points": int((merged.frame == k).sum()),
             "icp_shift_mm": round(float(np.linalg.norm(transform_points(correction, centre) - centre)) * 1000, 6),
             "icp_rotation_deg": round(float(np.degrees(Rotation.from_matrix(correction[:3, :3]).magnitude())), 6),
+            "icp_refined": bool(merged.refined[k]), "icp_open_dof": int(merged.undetermined[k]),
+            "far_side_points": int(merged.far_side[k]),
         }
         for k, (frame, correction) in enumerate(zip(frames, merged.corrections))
         for centre in [np.nanmean(frame.points_m, axis=0, keepdims=True)]
     ]
-    record = {**result.record, "input": {**result.record["input"], "frames": frames_record}}
+    record = {**result.record, "input": {**result.record["input"], "frames": frames_record,
+                                         "icp_converged": bool(merged.converged)}}
     timings = {"merge": spent["merge"] + result.timings_s.get("merge", 0.0)}
     timings.update((name, value) for name, value in result.timings_s.items() if name != "merge")
     return replace(

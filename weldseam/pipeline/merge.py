@@ -1,16 +1,25 @@
 """Merge several frames of one workpiece, each already placed in the base frame by its pose.
 
-Each frame first loses its flying-pixel veils (patches seen edge-on). The first frame is the
-reference: every other frame, in order, is refined by point-to-plane ICP against the union of
-the frames before it (so a frame only needs to overlap one earlier frame); ICP fixes the frames
-relative to the reference, whose own pose error passes to the result. Then the frames are
-de-duplicated on a voxel grid: in each voxel only the frame with the most points there is kept
-(the densest view is the closest, most head-on one), so an overlap holds one surface, not two
-noisy layers. Every merged point keeps the camera origin of the frame that saw it.
+Each frame is cut into small surface patches (voxels, each with a plane fitted to the points
+of the 3 x 3 x 3 voxels around it). Patches seen edge-on are flying-pixel veils at depth
+edges and are dropped. Then all frames are registered at once: one point-to-plane ICP moves
+every frame but the first (the reference, whose own pose error passes to the result)
+against all the others together, so a frame is held by every frame it overlaps, not only by
+the earlier ones. It aligns smooth patches only (a groove, an edge or a seam is seen
+differently from each side and would bias it), and where the surface bends too sharply for
+them, smooth patches of half the size (a groove's flanks, which fix a seam's cross
+direction); it takes as many patches of each facing direction (a table filling most of a
+view must not outvote the part's few faces that fix the other directions). A motion the
+overlaps do not fix (a slide along a prism, a turn about an axis of symmetry) is left as
+the poses give it and counted, never guessed; a registration that does not settle changes
+no frame and says so.
 
-ICP needs overlaps that fix all six degrees of freedom: two views sharing only parallel faces
-(a prism) cannot be placed along it, and a surface of revolution cannot be turned about its
-axis (harmless for a seam around that axis).
+Where two frames see the two sides of a thin wall (the outside of a pipe, and its inside
+through the open top) only one side is kept, the one not enclosed by the part: the seam
+stages expect, as in any single view, one surface in a neighbourhood. Last, the frames are
+de-duplicated on a voxel grid: in each voxel only the frame with the most points there is
+kept (the densest view is the closest, most head-on one), so an overlap holds one surface,
+not two noisy layers. Every merged point keeps the camera origin of the frame that saw it.
 """
 
 from __future__ import annotations
@@ -22,28 +31,41 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from weldseam.geometry import transform_points
-from weldseam.pipeline.neighbours import COVARIANCE_ENTRIES, extreme_eigenvectors
+from weldseam.pipeline.neighbours import COVARIANCE_ENTRIES, extreme_eigenvectors, radius_pairs
 
-COARSE_ITERATIONS = 20
-FINE_ITERATIONS = 20
-MAX_ICP_POINTS = 3000  # source points per ICP iteration (evenly strided): plenty for 6 unknowns
+# A patch has at least this many occupied voxels of the 27 around it (fewer are stray points);
+# a surface patch, at least this many points in each on average (sparser: flying pixels).
+MIN_PATCH_VOXELS = 6
+MIN_POINTS_PER_VOXEL = 2.0
+# A smooth patch's normal is within this of each neighbour patch's (a 30 mm radius turns 8 deg in 4 mm).
+MAX_PATCH_TURN_DEG = 15.0
+MAX_NORMAL_ANGLE_DEG = 20.0  # an ICP pair's two normals agree within this
+PATCHES_PER_DIRECTION = 400  # ICP patches per facing direction (_direction_cells) and patch size
 TUKEY_C = 4.685  # Tukey's biweight constant, in robust standard deviations (1.4826 MAD)
 MIN_SCALE_M = 0.0005  # the Tukey cut-off never drops below this (sensor noise scale)
-CONVERGED_M = 3e-5  # an ICP step moving every point by less than this ends the pass
-NEIGHBOURS = 10  # samples in the PCA of an ICP normal
-PATCH_RADIUS_VOXELS = 2.5  # ...all within this many voxels: a surface patch, not stray points
-# ICP uses planar patches only: lambda_min / trace of the neighbourhood covariance below this
-# (a noisy plane ~0.01). Flying-pixel veils at depth edges differ between views and would bias it.
-MAX_SURFACE_VARIATION = 0.01
-MAX_NORMAL_ANGLE_DEG = 20.0
+# A direction of the joint motion is refined only if the pairs hold at least this much
+# surface facing along it (summed over both members of every pair, so about half of it in
+# one frame), beyond what normals tilted by NORMAL_NOISE would give.
+MIN_FACING_AREA_M2 = 5e-5
+NORMAL_NOISE = np.sin(np.radians(10.0))
+CONVERGED_M = 3e-5  # an ICP step moving every paired point by less than this, at the finest reach, ends it
+MAX_ITERATIONS = 60
+FAR_SIDE_M = 0.015  # two frames seeing opposite faces of a wall thinner than this: one face is kept
+MAX_WALL_ANGLE_DEG = 60.0  # a wall's two faces are within this of facing opposite ways
+CONVEXITY_MARGIN_PER_M = 5.0  # curvatures closer than this (a 200 mm radius) are alike
+# Key differences (see _voxel_keys) to the 27 voxels around one, itself included.
+NEIGHBOUR_KEYS = np.array([(i << 42) + (j << 21) + k for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (-1, 0, 1)])
 
 
 class MergedFrames(NamedTuple):
     """points_m (N, 3), camera_origins_m (N, 3) of the frame that saw each point, frame (N,)
     int index of that frame; corrections (K, 4, 4): the rigid ICP correction applied to each
     frame on top of its pose (identity for the reference and unrefined frames); overlap (K,):
-    share of each frame's ICP points that found the surface of the earlier frames (1 for the
-    reference); refined (K,) bool."""
+    share of each frame's ICP patches that found the surface of another frame (1 for the
+    reference); refined (K,) bool; converged: the ICP ended with a step below CONVERGED_M
+    (when it did not, no frame was refined); undetermined (K,): in how many directions of
+    the joint motion that the overlaps leave open (kept as the poses give them) each frame
+    moves; far_side (K,): points of each frame dropped as the far side of a thin wall."""
 
     points_m: np.ndarray
     camera_origins_m: np.ndarray
@@ -51,141 +73,379 @@ class MergedFrames(NamedTuple):
     corrections: np.ndarray
     overlap: np.ndarray
     refined: np.ndarray
+    converged: bool
+    undetermined: np.ndarray
+    far_side: np.ndarray
+
+
+class Patches(NamedTuple):
+    """One frame's surface patches (M of them): group (N,) patch of each point; point (M, 3)
+    voxel centroid projected on the patch plane; plane (M, 3) a point of that plane (the
+    mean of the 3 x 3 x 3 voxels around); normal (M, 3) unit, toward the camera; count (M,)
+    points in the voxel; veil (M,) seen more edge-on than the incidence limit; surface (M,)
+    neither a veil nor stray points; smooth (M,) a surface patch whose normal turns little
+    to its neighbours'; neighbours (M, 27) the patches around each (-1: none)."""
+
+    group: np.ndarray
+    point: np.ndarray
+    plane: np.ndarray
+    normal: np.ndarray
+    count: np.ndarray
+    veil: np.ndarray
+    surface: np.ndarray
+    smooth: np.ndarray
+    neighbours: np.ndarray
+
+
+class Surface(NamedTuple):
+    """What ICP aligns in one frame (M samples): point (M, 3) on the patch plane, plane (M, 3)
+    a point of that plane, normal (M, 3) unit toward the camera, area_m2 (M,) the patch's
+    voxel face (its weight: a fine patch counts a quarter of a coarse one)."""
+
+    point: np.ndarray
+    plane: np.ndarray
+    normal: np.ndarray
+    area_m2: np.ndarray
+
+
+class Registration(NamedTuple):
+    """corrections (K, 4, 4), overlap (K,), refined (K,), converged, undetermined (K,): as in MergedFrames."""
+
+    corrections: np.ndarray
+    overlap: np.ndarray
+    refined: np.ndarray
+    converged: bool
+    undetermined: np.ndarray
 
 
 def merge_frames(
     frames: Sequence[np.ndarray], camera_origins_m: np.ndarray, *, dedup_voxel_m: float, icp_voxel_m: float,
     icp_max_distance_m: float, min_overlap: float, max_incidence_deg: float, refine: bool = True,
 ) -> MergedFrames:
-    """Align (point-to-plane ICP) and merge base-frame frames (K of (N_k, 3), metres) seen from
-    `camera_origins_m` (K, 3).
+    """Align (joint point-to-plane ICP) and merge base-frame frames (K of (N_k, 3), metres)
+    seen from `camera_origins_m` (K, 3).
 
-    Each frame is first cut to its surface: on `icp_voxel_m` voxel centroids, a patch seen
-    more edge-on than `max_incidence_deg` (angle between its PCA normal and the ray to the
-    camera) is a veil of flying pixels at a depth edge, harmless in its own frame (sparse) but
-    not beside another frame's dense view of the face behind it; its points are dropped.
-    ICP pairs planar centroids: a first pass up to `icp_max_distance_m` apart (the largest
-    pose error it corrects), a second up to 2 x `icp_voxel_m`, each minimising sum w_i r_i^2,
-    r_i = n_i . (R p_i + t - q_i), with Tukey weights w_i = (1 - (r_i / c)^2)^2,
-    c = 4.685 x 1.4826 median |r| (0.5 mm to the pass's distance). A frame whose share of
-    paired points is below `min_overlap` keeps its pose (refined False). Non-finite points
-    are dropped.
+    Patches are `icp_voxel_m` voxels; a patch seen more edge-on than `max_incidence_deg`
+    (angle between its normal and the ray to the camera) is a veil and its points are
+    dropped. ICP pairs each frame's smooth patches with the nearest smooth patch of every
+    other frame (normals within MAX_NORMAL_ANGLE_DEG), at most `icp_max_distance_m` apart at
+    first (the largest pose error it corrects), halving to 2 x `icp_voxel_m`. Each step
+    minimises sum a_i w_i r_i^2 over the motions of all frames but the first at once:
+    r_i = n_i . (p_i - q_i) the distance of a patch point to the paired patch's plane, a_i
+    the patch's area, Tukey weights w_i = (1 - (r_i / c)^2)^2 with c = 4.685 x 1.4826
+    median |r| (from 0.5 mm up to the reach). Only directions of the joint motion that the
+    pairs fix (MIN_FACING_AREA_M2) move. A frame whose share of paired patches is below
+    `min_overlap` keeps its pose (refined False) and takes no part. Non-finite points are
+    dropped.
     """
     origins = np.asarray(camera_origins_m, dtype=np.float64).reshape(-1, 3)
-    clouds, samples, normals = [], [], []
+    clouds, patches = [], []
     for cloud, origin in zip(frames, origins):
         cloud = np.asarray(cloud, dtype=np.float64)
         finite = np.isfinite(cloud).all(axis=1)
         cloud = cloud if finite.all() else cloud[finite]
-        surface, sample, sample_normals = _surface(cloud, origin, icp_voxel_m, max_incidence_deg)
-        clouds.append(cloud[surface])
-        samples.append(sample)
-        normals.append(sample_normals)
+        found = _patches(cloud, origin, icp_voxel_m, max_incidence_deg)
+        seen = ~found.veil[found.group]
+        clouds.append(cloud[seen])
+        patches.append(found._replace(group=found.group[seen]))
     count = len(clouds)
-    corrections = np.tile(np.eye(4), (count, 1, 1))
-    overlap, refined = np.ones(count), np.zeros(count, dtype=bool)
     if refine and count > 1:
-        fine_m = 2.0 * icp_voxel_m
-        for k in range(1, count):
-            correction, overlap[k] = _point_to_plane_icp(
-                samples[k], normals[k], *_placed_union(samples, normals, corrections, range(k)),
-                ((icp_max_distance_m, COARSE_ITERATIONS), (fine_m, FINE_ITERATIONS)),
-            )
-            refined[k] = overlap[k] >= min_overlap
-            if refined[k]:
-                corrections[k] = correction
-    placed = [transform_points(corrections[k], cloud) if refined[k] else cloud for k, cloud in enumerate(clouds)]
+        surfaces = [_icp_surface(cloud, patch, origin, icp_voxel_m, max_incidence_deg)
+                    for cloud, patch, origin in zip(clouds, patches, origins)]
+        registration = _register(surfaces, icp_max_distance_m, 2.0 * icp_voxel_m, min_overlap)
+    else:
+        registration = Registration(np.tile(np.eye(4), (count, 1, 1)), np.ones(count), np.zeros(count, dtype=bool),
+                                    True, np.zeros(count, dtype=int))
+    corrections = registration.corrections
+    placed = [transform_points(corrections[k], cloud) for k, cloud in enumerate(clouds)]
     moved_origins = np.einsum("kij,kj->ki", corrections[:, :3, :3], origins) + corrections[:, :3, 3]
+    near = _near_sides(patches, corrections, origins)
+    placed = [cloud[near[k][patch.group]] for k, (cloud, patch) in enumerate(zip(placed, patches))]
+    far_side = np.array([len(cloud) - int(n[p.group].sum()) for cloud, n, p in zip(clouds, near, patches)])
     keep = _densest_frame_per_voxel(placed, dedup_voxel_m)
     frame = np.repeat(np.arange(count), [int(k.sum()) for k in keep])
     points = np.vstack([cloud[k] for cloud, k in zip(placed, keep)]) if placed else np.empty((0, 3))
-    return MergedFrames(points, moved_origins[frame], frame, corrections, overlap, refined)
+    return MergedFrames(points, moved_origins[frame], frame, corrections, registration.overlap,
+                        registration.refined, registration.converged, registration.undetermined, far_side)
 
 
-def _surface(cloud: np.ndarray, origin: np.ndarray, voxel_m: float, max_incidence_deg: float):
-    """(N,) bool: points of `cloud` not in an edge-on patch (a veil); and the planar `voxel_m`
-    centroids with their unit PCA normals (over the NEIGHBOURS nearest centroids, turned
-    toward the camera at `origin`), (M, 3) each, for ICP."""
+def merge_warnings(merged: MergedFrames, sources: Sequence[str], *, min_overlap: float, refine: bool) -> list[str]:
+    """One line per frame whose pose `merge_frames` could not refine, or not in every
+    direction (`sources` names the frames)."""
+    if not refine or len(sources) < 2:
+        return []
+    if not merged.converged:
+        return [f"{sources[0]} and the other frames: the poses did not settle under ICP in {MAX_ITERATIONS} steps "
+                f"(moving less than {CONVERGED_M * 1000:.2f} mm): every frame's pose is used as given"]
+    warnings = []
+    for name, overlap, refined, open_dof in zip(sources[1:], merged.overlap[1:], merged.refined[1:],
+                                                merged.undetermined[1:]):
+        if not refined:
+            warnings.append(f"{name}: it overlaps the other frames too little to refine its pose ({overlap:.0%} of "
+                            f"its surface, merge.min_overlap {min_overlap:.0%}): its pose is used as given")
+        elif open_dof:
+            warnings.append(f"{name}: its overlap with the other frames leaves its pose open in {open_dof} "
+                            f"direction{'s' if open_dof > 1 else ''} (a slide along a prism or a turn about an axis of "
+                            "symmetry): along them its pose is used as given")
+    return warnings
+
+
+def _patches(cloud: np.ndarray, origin: np.ndarray, voxel_m: float, max_incidence_deg: float) -> Patches:
+    """The `voxel_m` patches of `cloud` (N, 3) seen from `origin` (3,). Each patch's plane is
+    fitted to the points of the 3 x 3 x 3 voxels around it (covariance from summed moments):
+    voxel centroids alone lie off the plane where noise splits a surface between two layers
+    of voxels, and would pull ICP by a fraction of the noise."""
     if len(cloud) == 0:
-        return np.zeros(0, dtype=bool), cloud, cloud
-    _, group, sizes = np.unique(_voxel_keys(cloud, cloud.min(axis=0), voxel_m), return_inverse=True,
-                                return_counts=True)
+        empty = np.zeros((0, 3))
+        none = np.zeros(0, dtype=bool)
+        return Patches(np.zeros(0, dtype=np.intp), empty, empty, empty, np.zeros(0), none, none, none,
+                       np.zeros((0, len(NEIGHBOUR_KEYS)), dtype=np.intp))
+    corner = cloud.min(axis=0) - voxel_m  # every voxel has its neighbours' cell indices >= 0
+    keys, group, counts = np.unique(_voxel_keys(cloud, corner, voxel_m), return_inverse=True, return_counts=True)
     group = group.ravel()
-    sample = np.column_stack([np.bincount(group, weights=cloud[:, k]) for k in range(3)]) / sizes[:, None]
-    if len(sample) <= NEIGHBOURS:
-        return np.ones(len(cloud), dtype=bool), sample[:0], sample[:0]
-    distance, nearest = cKDTree(sample, balanced_tree=False).query(sample, k=NEIGHBOURS, workers=-1)
-    neighbours = sample[nearest]
-    centred = neighbours - neighbours.mean(axis=1, keepdims=True)
-    x, y, z = centred[..., 0], centred[..., 1], centred[..., 2]
-    xy, xz, yz = (x * y).mean(axis=1), (x * z).mean(axis=1), (y * z).mean(axis=1)
-    covariance = np.stack(
-        [(x * x).mean(axis=1), xy, xz, xy, (y * y).mean(axis=1), yz, xz, yz, (z * z).mean(axis=1)], axis=1
-    ).reshape(-1, 3, 3)
-    rows, cols = np.array(COVARIANCE_ENTRIES).T
-    normals = extreme_eigenvectors(covariance[:, rows, cols], largest=False)
-    rays = origin - sample
-    facing = np.einsum("ij,ij->i", normals, rays)
-    normals = np.where(facing[:, None] < 0, -normals, normals)
-    cosine = np.abs(facing) / np.linalg.norm(rays, axis=1)
-    patch = distance[:, -1] <= PATCH_RADIUS_VOXELS * voxel_m
-    veil = patch & (cosine < np.cos(np.radians(max_incidence_deg)))
-    flatness = np.einsum("ni,nij,nj->n", normals, covariance, normals)
-    planar = patch & ~veil & (flatness <= MAX_SURFACE_VARIATION * np.trace(covariance, axis1=1, axis2=2))
-    return ~veil[group], sample[planar], normals[planar]
+    centre = cloud.mean(axis=0)
+    x, y, z = (cloud - centre).T
+    moments = np.column_stack([counts] + [
+        np.bincount(group, weights=v, minlength=len(keys)) for v in (x, y, z, x * x, y * y, z * z, x * y, x * z, y * z)
+    ])
+    # Row -1 of the padded moments is zero: a missing neighbour adds nothing.
+    padded = np.vstack([moments, np.zeros((1, moments.shape[1]))])
+    neighbours = _neighbour_voxels(keys)
+    block = np.zeros_like(moments)
+    for index in neighbours.T:
+        block += padded[index]
+    mean = block[:, 1:4] / block[:, :1]
+    first, second = np.array(COVARIANCE_ENTRIES).T
+    covariance = block[:, 4:] / block[:, :1] - mean[:, first] * mean[:, second]
+    normal = extreme_eigenvectors(covariance, largest=False)
+    plane = mean + centre
+    centroid = moments[:, 1:4] / moments[:, :1] + centre
+    point = centroid - normal * np.einsum("ij,ij->i", normal, centroid - plane)[:, None]
+    rays = origin - point
+    facing = np.einsum("ij,ij->i", normal, rays)
+    normal = np.where(facing[:, None] < 0, -normal, normal)
+    occupied = (neighbours >= 0).sum(axis=1)
+    patch = occupied >= MIN_PATCH_VOXELS
+    veil = patch & (np.abs(facing) < np.cos(np.radians(max_incidence_deg)) * np.linalg.norm(rays, axis=1))
+    surface = patch & ~veil & (block[:, 0] >= MIN_POINTS_PER_VOXEL * occupied)
+    smooth = surface.copy()
+    rows = np.flatnonzero(surface)
+    turn = np.einsum("ij,ikj->ik", normal[rows], np.vstack([normal, normal[:1]])[neighbours[rows]])
+    smooth[rows] = np.all((turn >= np.cos(np.radians(MAX_PATCH_TURN_DEG))) | (neighbours[rows] < 0), axis=1)
+    return Patches(group, point, plane, normal, counts.astype(np.float64), veil, surface, smooth, neighbours)
 
 
-def _placed_union(samples, normals, corrections, frames) -> tuple[np.ndarray, np.ndarray]:
-    """The ICP centroids (M, 3) and normals (M, 3) of `frames`, each moved by its correction."""
-    return (
-        np.vstack([transform_points(corrections[j], samples[j]) for j in frames]),
-        np.vstack([normals[j] @ corrections[j][:3, :3].T for j in frames]),
-    )
+def _neighbour_voxels(keys: np.ndarray) -> np.ndarray:
+    """(V, 27) index into the sorted unique voxel keys `keys` (V,) of the voxels around each
+    (NEIGHBOUR_KEYS order), -1 where there is none. One search per column of 3 voxels along
+    z: in sorted keys, z - 1 and z + 1 sit right before and after the key of z."""
+    found = np.empty((len(keys), len(NEIGHBOUR_KEYS)), dtype=np.intp)
+    padded = np.r_[keys, -1]  # a position past the end reads a key that is never wanted
+    for column in range(0, len(NEIGHBOUR_KEYS), 3):
+        middle = keys + NEIGHBOUR_KEYS[column + 1]
+        at = np.searchsorted(keys, middle)
+        here = padded[at] == middle
+        below = at - 1
+        found[:, column] = np.where((below >= 0) & (padded[below] == middle - 1), below, -1)
+        found[:, column + 1] = np.where(here, at, -1)
+        above = at + here
+        found[:, column + 2] = np.where(padded[above] == middle + 1, above, -1)
+    return found
 
 
-def _point_to_plane_icp(source, source_normals, target, target_normals, passes):
-    """(4, 4) correction moving `source` (N, 3) onto the surface `target` (M, 3), and the share
-    of source points paired in the last iteration (0 when too few pair: no correction).
-    `passes`: (pairing distance m, at most this many iterations) pairs, run in order. A pair
-    is two points within the pass's distance whose normals (each toward its own camera) agree
-    within MAX_NORMAL_ANGLE_DEG: a point whose own surface the target lacks (hidden, or at
-    grazing incidence in the other view) must not pull toward a neighbouring face, nor the
-    outside of a wall toward its inside seen by another view."""
+def _convexity(patches: Patches, rows: np.ndarray) -> np.ndarray:
+    """(R,) the most convex curvature (1/m) of the patches `rows` (R,): the larger
+    eigenvalue of the shape operator [[A, B], [B, C]] fitted by least squares to the normal
+    curvatures toward its neighbour patches,
+    k(t) = (n_j - n_i) . t / |t|^2 = A c^2 + 2 B c s + C s^2, t = p_j - p_i in the tangent
+    plane, (c, s) its direction there. Positive where the surface bends away from the side
+    its normal faces (the outside of a tube), about 0 on a plane."""
+    point, normal, neighbours = patches.point[rows], patches.normal[rows], patches.neighbours[rows]
+    helper = np.where(np.abs(normal[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
+    first = np.cross(normal, helper)
+    first /= np.linalg.norm(first, axis=1, keepdims=True)
+    second = np.cross(normal, first)
+    lhs, rhs = np.zeros((len(point), 3, 3)), np.zeros((len(point), 3))
+    for index in neighbours.T:
+        step = patches.point[index] - point
+        step -= normal * np.einsum("ij,ij->i", step, normal)[:, None]
+        length2 = np.einsum("ij,ij->i", step, step)
+        valid = (index >= 0) & (length2 > 0)
+        length2[~valid] = 1.0
+        curvature = np.einsum("ij,ij->i", patches.normal[index] - normal, step) / length2
+        c, s = np.einsum("ij,ij->i", step, first), np.einsum("ij,ij->i", step, second)
+        row = np.column_stack([c * c, 2 * c * s, s * s]) / length2[:, None] * valid[:, None]
+        lhs += row[:, :, None] * row[:, None, :]
+        rhs += row * curvature[:, None]
+    lhs += 1e-9 * np.eye(3)  # a patch with too few neighbours gets a flat answer, not a singular one
+    a, b, c = np.linalg.solve(lhs, rhs[:, :, None])[:, :, 0].T
+    return (a + c) / 2 + np.sqrt(((a - c) / 2) ** 2 + b * b)
+
+
+def _icp_surface(cloud: np.ndarray, patches: Patches, origin: np.ndarray, voxel_m: float,
+                 max_incidence_deg: float) -> Surface:
+    """The smooth `voxel_m` patches of a frame, and where they bend (grooves, edges, small
+    radii: too sharp for them), the smooth patches of half that size: a groove's flanks, a
+    few millimetres wide, are what fixes a seam's cross direction between views."""
+    bent = ~patches.smooth[patches.group]
+    fine = _patches(cloud[bent], origin, voxel_m / 2, max_incidence_deg)
+    levels = [(patches, patches.smooth, voxel_m), (fine, fine.smooth, voxel_m / 2)]
+    picked = [(found, np.flatnonzero(smooth)[_balanced(found.normal[smooth], PATCHES_PER_DIRECTION)], size)
+              for found, smooth, size in levels]
+    def stacked(name: str) -> np.ndarray:
+        return np.vstack([getattr(found, name)[index] for found, index, _ in picked])
+
+    area = np.concatenate([np.full(len(index), size * size) for _, index, size in picked])
+    return Surface(stacked("point"), stacked("plane"), stacked("normal"), area)
+
+
+def _balanced(normal: np.ndarray, per_direction: int) -> np.ndarray:
+    """Indices (ascending) of at most `per_direction` of `normal` (M, 3) per facing direction
+    (_direction_cells), evenly strided within each."""
+    direction = _direction_cells(normal)
+    order = np.argsort(direction, kind="stable")
+    _, start, size = np.unique(direction[order], return_index=True, return_counts=True)
+    rank = np.arange(len(order)) - np.repeat(start, size)
+    stride = np.repeat(-(-size // per_direction), size)
+    return np.sort(order[rank % stride == 0])
+
+
+class _Pairs(NamedTuple):
+    """Paired patches of one frame a (source) with another frame b (target), placed."""
+
+    source: int
+    target: int
+    index: np.ndarray
+    area_m2: np.ndarray
+    points: np.ndarray
+    residuals: np.ndarray
+    normals: np.ndarray
+
+
+def _register(surfaces: list[Surface], reach_m: float, fine_m: float, min_overlap: float) -> Registration:
+    """Joint point-to-plane ICP of all frames but the first (see merge_frames)."""
+    count = len(surfaces)
+    targets = [(s.point, s.plane, s.normal) for s in surfaces]
+    sources = [(s.point, s.normal, s.area_m2) for s in surfaces]
+    trees = [cKDTree(point, balanced_tree=False) for point, _, _ in targets]
+    identity = np.tile(np.eye(4), (count, 1, 1))
+    taking = np.ones(count, dtype=bool)
+    overlap = _overlap(_pair(sources, targets, trees, identity, taking, reach_m), sources)
+    overlap[0] = 1.0
+    taking = overlap >= min_overlap
+    free = np.flatnonzero(taking[1:]) + 1
+    if len(free) == 0:
+        return Registration(identity, overlap, taking & False, True, np.zeros(count, dtype=int))
+    corrections = identity.copy()
+    reach, converged = reach_m, False
+    undetermined = np.zeros(count, dtype=int)
+    for _ in range(MAX_ITERATIONS):
+        pairs = _pair(sources, targets, trees, corrections, taking, reach)
+        motions, lever_m, open_dof = _joint_step(pairs, free, reach)
+        if motions is None:
+            break
+        for k, motion in zip(free, motions):
+            corrections[k] = motion @ corrections[k]
+        step_m = max(np.linalg.norm(m[:3, :3] - np.eye(3), 2) * lever_m + np.linalg.norm(m[:3, 3]) for m in motions)
+        undetermined[free] = open_dof
+        if reach > fine_m:
+            if step_m < 0.1 * reach:
+                reach = max(fine_m, reach / 2)
+        elif step_m < CONVERGED_M:
+            converged = True
+            break
+    if not converged:
+        return Registration(identity, overlap, np.zeros(count, dtype=bool), False, np.zeros(count, dtype=int))
+    final = _overlap(_pair(sources, targets, trees, corrections, taking, reach), sources)
+    overlap[free] = final[free]
+    refined = np.zeros(count, dtype=bool)
+    refined[free] = True
+    return Registration(corrections, overlap, refined, True, undetermined)
+
+
+def _pair(sources, targets, trees, corrections, taking, reach_m) -> list[_Pairs]:
+    """Every ordered pair of distinct frames that take part: each source patch of one with
+    the nearest target patch of the other within `reach_m` whose normal agrees (both placed
+    by `corrections`)."""
     min_cosine = np.cos(np.radians(MAX_NORMAL_ANGLE_DEG))
-    stride = max(1, -(-len(source) // MAX_ICP_POINTS))
-    if len(source) == 0 or len(target) == 0:
-        return np.eye(4), 0.0
-    tree = cKDTree(target, balanced_tree=False)
-    matrix = np.eye(4)
-    paired = 0.0
-    for index, (reach, iterations) in enumerate(passes):
-        # Early passes only bring the frame close: a third of the points will do.
-        thin = stride if index == len(passes) - 1 else 3 * stride
-        points, point_normals = source[::thin], source_normals[::thin]
-        for _ in range(iterations):
-            moved = transform_points(matrix, points)
-            distance, nearest = tree.query(moved, distance_upper_bound=reach, workers=-1)
-            found = np.isfinite(distance)
-            found[found] = np.einsum(
-                "ij,ij->i", point_normals[found] @ matrix[:3, :3].T, target_normals[nearest[found]]
-            ) >= min_cosine
-            paired = float(found.mean())
-            if found.sum() < 6:
-                return np.eye(4), 0.0
-            p, q, n = moved[found], target[nearest[found]], target_normals[nearest[found]]
-            residual = np.einsum("ij,ij->i", n, p - q)
-            scale = min(reach, max(TUKEY_C * 1.4826 * np.median(np.abs(residual)), MIN_SCALE_M))
-            weight = np.clip(1.0 - (residual / scale) ** 2, 0.0, None) ** 2
-            centre = p.mean(axis=0)
-            jacobian = np.hstack([np.cross(p - centre, n), n])
-            step = np.linalg.lstsq(
-                jacobian.T @ (weight[:, None] * jacobian), -jacobian.T @ (weight * residual), rcond=None
-            )[0]
-            update = _small_motion(step[:3], step[3:], centre)
-            matrix = update @ matrix
-            if np.linalg.norm(step[:3]) * np.abs(p - centre).max() + np.linalg.norm(step[3:]) < CONVERGED_M:
-                break
-    return matrix, paired
+    pairs = []
+    for a in np.flatnonzero(taking):
+        point = transform_points(corrections[a], sources[a][0])
+        normal = sources[a][1] @ corrections[a][:3, :3].T
+        for b in np.flatnonzero(taking):
+            if a == b:
+                continue
+            to_b = np.linalg.inv(corrections[b]) @ corrections[a]
+            distance, nearest = trees[b].query(transform_points(to_b, sources[a][0]), distance_upper_bound=reach_m,
+                                               workers=-1)
+            found = np.flatnonzero(np.isfinite(distance))
+            _, plane, target_normal = targets[b]
+            target_normal = target_normal[nearest[found]] @ corrections[b][:3, :3].T
+            agree = np.einsum("ij,ij->i", normal[found], target_normal) >= min_cosine
+            found, target_normal = found[agree], target_normal[agree]
+            residual = np.einsum("ij,ij->i", target_normal,
+                                 point[found] - transform_points(corrections[b], plane[nearest[found]]))
+            pairs.append(_Pairs(int(a), int(b), found, sources[a][2][found], point[found], residual, target_normal))
+    return pairs
+
+
+def _overlap(pairs: list[_Pairs], sources) -> np.ndarray:
+    """(K,) share of each frame's source patches paired with any other frame."""
+    paired = [np.zeros(len(point), dtype=bool) for point, _, _ in sources]
+    for p in pairs:
+        paired[p.source][p.index] = True
+    return np.array([found.mean() if len(found) else 0.0 for found in paired])
+
+
+def _joint_step(pairs: list[_Pairs], free: np.ndarray, reach_m: float):
+    """One Gauss-Newton step of all `free` frames' motions: (F,) (4, 4) motions, the lever
+    (m, the farthest paired point from the centre of rotation) and (F,) in how many of the
+    directions the pairs leave open each frame moves; None when nothing is paired."""
+    residual = np.concatenate([p.residuals for p in pairs]) if pairs else np.zeros(0)
+    if len(residual) < 6:
+        return None, 0.0, None
+    sigma = 1.4826 * np.median(np.abs(residual))
+    scale = min(reach_m, max(TUKEY_C * sigma, MIN_SCALE_M))
+    points = np.vstack([p.points for p in pairs])
+    centre = points.mean(axis=0)
+    lever = np.sqrt(((points - centre) ** 2).sum(axis=1).mean())  # rotations in units of metres at this lever
+    width = 6 * len(free)
+    column = {int(k): 6 * i for i, k in enumerate(free)}
+    hessian, gradient = np.zeros((width, width)), np.zeros(width)
+    rows = []
+    for p in pairs:
+        weight = p.area_m2 * np.clip(1.0 - (p.residuals / scale) ** 2, 0.0, None) ** 2
+        arm = (p.points - centre) / lever
+        jacobian = np.hstack([np.cross(arm, p.normals), p.normals])
+        # The pair's row of the joint Jacobian: +J in the source's columns, -J in the target's.
+        selector = np.zeros((6, width))
+        for u, sign in ((p.source, 1.0), (p.target, -1.0)):
+            if u in column:
+                selector[:, column[u]:column[u] + 6] += sign * np.eye(6)
+        weighted = jacobian * weight[:, None]
+        hessian += selector.T @ (weighted.T @ jacobian) @ selector
+        gradient -= selector.T @ (weighted.T @ p.residuals)
+        rows.append((arm, p.normals, weight, selector))
+    curvature, directions = np.linalg.eigh(hessian)
+    # The information along each direction: per pair, the square of its normal's component
+    # along the motion's velocity u there, less what a normal tilted by noise would give
+    # (NORMAL_NOISE^2 |u|^2): many nearly level patches of a table must not add up to
+    # fixing a horizontal slide, nor the patches around a pipe a turn about its axis.
+    information = np.zeros(width)
+    for arm, normals, weight, selector in rows:
+        motion = selector @ directions  # (6, D): each direction's rotation and translation for this pair
+        velocity = np.cross(motion[:3].T[None, :, :], arm[:, None, :]) + motion[3:].T[None, :, :]
+        along = np.einsum("ndk,nk->nd", velocity, normals)
+        information += weight @ np.maximum(along * along - NORMAL_NOISE**2 * (velocity * velocity).sum(axis=2), 0.0)
+    fixed = information >= MIN_FACING_AREA_M2
+    step = directions[:, fixed] @ ((directions[:, fixed].T @ gradient) / curvature[fixed])
+    # How many independent open directions move each frame: the rank of its block of the open
+    # subspace, counting singular values whose square (the share of a direction) is a fifth or more.
+    blocks = directions[:, ~fixed].reshape(len(free), 6, -1)
+    open_dof = [int((np.linalg.svd(block, compute_uv=False) ** 2 >= 0.2).sum()) for block in blocks]
+    motions = [_small_motion(part[:3] / lever, part[3:], centre) for part in step.reshape(len(free), 6)]
+    radius = np.sqrt(((points - centre) ** 2).sum(axis=1).max())
+    return motions, radius, np.array(open_dof)
 
 
 def _small_motion(rotation_vector: np.ndarray, translation: np.ndarray, centre: np.ndarray) -> np.ndarray:
@@ -196,6 +456,76 @@ def _small_motion(rotation_vector: np.ndarray, translation: np.ndarray, centre: 
     matrix[:3, :3] = Rotation.from_rotvec(rotation_vector).as_matrix()
     matrix[:3, 3] = centre - matrix[:3, :3] @ centre + translation
     return matrix
+
+
+def _near_sides(patches: list[Patches], corrections: np.ndarray, origins: np.ndarray) -> list[np.ndarray]:
+    """Per frame, (M_k,) bool: its patches that are not the far side of a thin wall. Two
+    surface patches of different frames within FAR_SIDE_M, facing opposite ways (within
+    MAX_WALL_ANGLE_DEG: one may be a groove's flank) and each behind the other, are the two
+    faces of one wall. The far
+    side is the less convex one (by more than CONVEXITY_MARGIN_PER_M: the inside of a tube,
+    seen through its open end, against its outside), else the one its camera sees at the
+    coarser resolution, cos(incidence) / range^2; ties: the later frame."""
+    placed = []
+    for p, c, origin in zip(patches, corrections, origins):
+        surface = np.flatnonzero(p.surface)
+        point, normal = transform_points(c, p.point[surface]), p.normal[surface] @ c[:3, :3].T
+        rays = transform_points(c, origin[None])[0] - point
+        resolution = np.abs(np.einsum("ij,ij->i", normal, rays)) / np.linalg.norm(rays, axis=1) ** 3
+        placed.append((surface, point, normal, resolution))
+    trees = [cKDTree(point, balanced_tree=False) for _, point, _, _ in placed]
+    facings = [np.unique(_direction_cells(normal)) for _, _, normal, _ in placed]
+    min_cosine = np.cos(np.radians(MAX_WALL_ANGLE_DEG))
+    near = []
+    for a, (index, point, normal, resolution) in enumerate(placed):
+        wall, far = np.zeros(len(point), dtype=bool), np.zeros(len(point))
+        for b, (other_index, other, other_normal, other_resolution) in enumerate(placed):
+            if a == b or len(other) == 0:
+                continue
+            # Only where b faces about the other way somewhere can a patch of a be a wall's side.
+            asked = np.flatnonzero(np.isin(_direction_cells(-normal), _around(facings[b])))
+            distance, nearest = trees[b].query(point[asked], distance_upper_bound=FAR_SIDE_M, workers=-1)
+            hit = np.isfinite(distance)
+            mine, theirs = asked[hit], nearest[hit]
+            apart = other[theirs] - point[mine]
+            sides = ((np.einsum("ij,ij->i", normal[mine], other_normal[theirs]) < -min_cosine)
+                     & (np.einsum("ij,ij->i", apart, normal[mine]) < 0)
+                     & (np.einsum("ij,ij->i", apart, other_normal[theirs]) > 0))
+            mine, theirs = mine[sides], theirs[sides]
+            bend = _convexity(patches[a], index[mine]) - _convexity(patches[b], other_index[theirs])
+            alike = np.abs(bend) <= CONVEXITY_MARGIN_PER_M
+            coarser = (resolution[mine] < other_resolution[theirs]) | (
+                (resolution[mine] == other_resolution[theirs]) & (a > b))
+            wall[mine] = True
+            far[mine] = np.maximum(far[mine], (bend < -CONVEXITY_MARGIN_PER_M) | (alike & coarser))
+        # One patch's call is noisy where the wall has holes or edges (a groove's root gap):
+        # each wall patch takes the majority of the calls within FAR_SIDE_M around it.
+        on_wall = np.flatnonzero(wall)
+        pairs = radius_pairs(point[on_wall], FAR_SIDE_M)
+        ends, voters_of = np.concatenate([pairs[:, 0], pairs[:, 1]]), np.concatenate([pairs[:, 1], pairs[:, 0]])
+        calls = far[on_wall] + np.bincount(ends, weights=far[on_wall][voters_of], minlength=len(on_wall))
+        voters = 1.0 + np.bincount(ends, minlength=len(on_wall))
+        keep = np.ones(len(patches[a].point), dtype=bool)
+        keep[index[on_wall[calls > 0.5 * voters]]] = False
+        near.append(keep)
+    return near
+
+
+def _direction_cells(normals: np.ndarray) -> np.ndarray:
+    """(M,) facing direction of each unit normal (M, 3): its cell in a 4 x 4 x 4 grid over [-1, 1]^3."""
+    cell = np.minimum(((normals + 1.0) * 2.0).astype(np.int64), 3)
+    return (cell[:, 0] * 4 + cell[:, 1]) * 4 + cell[:, 2]
+
+
+def _around(cells: np.ndarray) -> np.ndarray:
+    """The direction cells `cells` and those up to two cells away: two unit normals less than
+    1 apart in every coordinate (closer than 60 degrees) lie in them."""
+    x, y, z = cells // 16, cells // 4 % 4, cells % 4
+    span = range(-2, 3)
+    shifted = [(x + i, y + j, z + k) for i in span for j in span for k in span]
+    return np.unique(np.concatenate([((u * 4 + v) * 4 + w)[(np.minimum(u, np.minimum(v, w)) >= 0)
+                                                           & (np.maximum(u, np.maximum(v, w)) <= 3)]
+                                     for u, v, w in shifted]))
 
 
 def _densest_frame_per_voxel(clouds: list[np.ndarray], voxel_m: float) -> list[np.ndarray]:

@@ -17,7 +17,6 @@ import dataclasses
 import numpy as np
 import trimesh
 
-from weldseam.geometry import unit
 from weldseam.synthetic.fixtures import add_clutter, rest_on_support
 from weldseam.synthetic.scenes import (
     UP, SyntheticScene, Tack, TruthSeam, _box, _butt_plates, _convex_solid, _draw,

@@ -36,23 +36,25 @@ from weldseam.synthetic.sensor import SensorNoise, look_at
 VIEW_DISTANCE_M = 0.4
 
 
-def box_groove_views(rng: np.random.Generator) -> tuple[SyntheticScene, list[np.ndarray]]:
+def box_groove_views(rng: np.random.Generator, *, cone: bool = True) -> tuple[SyntheticScene, list[np.ndarray]]:
     """`block_groove` (random size, yaw) and 3 camera poses (4, 4) T_base_camera, 0.4 m from
     the groove: above the -x face, above the top, above the +x face, all three also looking
     at the +y face. Together they see the whole groove (up one face, over the top, down the
     other). A locating cone (radius 30 mm, 45 deg flanks) stands 30 mm beyond the +y face:
     the faces of the block that two views share are the top and the +y face, a prism along
-    x that ICP cannot place along x; the cone, seen by every view, can."""
+    x that ICP cannot place along x; the cone, seen by every view, can. Without the cone
+    (`cone` False) nothing the views share fixes that slide."""
     yaw = float(rng.uniform(0.0, 360.0))
     scene = block_groove(rng, yaw_deg=yaw)
     turn = _rotation(UP, np.radians(yaw))
     seam = scene.seams[0].points_m
     local = transform_points(np.linalg.inv(turn), seam)
     width, height = np.ptp(local[:, 0]), local[:, 2].max()
-    beside = np.abs(transform_points(np.linalg.inv(turn), np.asarray(scene.mesh.vertices))[:, 1])
-    cone = trimesh.creation.cone(radius=0.03, height=0.03, sections=64)
-    cone.apply_translation([0.0, beside[beside < 0.1].max() + 0.06, 0.0])
-    scene = dataclasses.replace(scene, mesh=trimesh.util.concatenate([scene.mesh, cone.apply_transform(turn)]))
+    if cone:
+        beside = np.abs(transform_points(np.linalg.inv(turn), np.asarray(scene.mesh.vertices))[:, 1])
+        locator = trimesh.creation.cone(radius=0.03, height=0.03, sections=64)
+        locator.apply_translation([0.0, beside[beside < 0.1].max() + 0.06, 0.0])
+        scene = dataclasses.replace(scene, mesh=trimesh.util.concatenate([scene.mesh, locator.apply_transform(turn)]))
     cameras = []
     for side in (-1.0, 0.0, 1.0):
         target = np.array([side * width / 2, 0.0, height * (0.6 if side else 1.0)])
@@ -70,7 +72,9 @@ def pipe_ring_views(
     with a circumferential V-groove at half its height (depth = wall - 1..2 mm, flat bottom
     0-2 mm): a closed horizontal ring. `views` camera poses 0.4 m from the groove, evenly
     around the pipe (random start), `elevation_deg` above the horizontal; at 30 deg each sees
-    about a third of the ring, together all of it."""
+    about a third of the ring, together all of it. From about 45 deg up each view also sees,
+    through the open top, the inside of the far wall at the groove's height: a merge of the
+    views holds both faces of the wall there, a few millimetres apart."""
     radius = _draw(rng, outer_radius_m, 0.05, 0.08)
     wall = _draw(rng, wall_m, 0.006, 0.010)
     height = _draw(rng, height_m, 0.16, 0.22)
