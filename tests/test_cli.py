@@ -78,7 +78,7 @@ def test_dump_stages_writes_each_stage_as_ply(groove_ply, tmp_path):
     result = weldseam("plan", groove_ply, "--camera-origin", CAMERA, "-o", tmp_path / "p.csv", "--dump-stages", tmp_path / "dump")
     assert result.returncode == 0
     names = sorted(p.name for p in (tmp_path / "dump").iterdir())
-    assert names[0] == "00_condition.ply" and any("descriptor" in n for n in names) and names[-1].endswith("_resample.ply")
+    assert names[0] == "000_condition.ply" and any("descriptor" in n for n in names) and names[-1].endswith("_resample.ply")
 
 
 def test_a_flat_plate_exits_3_and_writes_nothing_unless_allowed(tmp_path):

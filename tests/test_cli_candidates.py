@@ -64,3 +64,15 @@ def test_the_record_lists_every_candidate_and_the_seam_each_became(tmp_path):
     rejected = [c for c in found if c["rejected"] is not None]
     assert rejected and all(c["seam"] is None and c["reason"] for c in rejected)
     assert all(len(c["centre_m"]) == 3 and c["length_m"] > 0 for c in found)
+
+
+def test_dump_stages_writes_every_candidates_points_however_many(plate_on_table, tmp_path):
+    path, origin = plate_on_table
+    # A crease rule of 8 degrees makes ~150 candidates of the plate's noise, each dumped at several steps.
+    result = weldseam("plan", path, "--camera-origin", origin, "-o", tmp_path / "p.json", "--dump-stages",
+                      tmp_path / "dump", "--set", "segment.min_crease_deg=8")
+    assert result.returncode == 3 and "Traceback" not in result.stderr.decode()
+    names = sorted(p.name for p in (tmp_path / "dump").iterdir())
+    assert len(names) > 200
+    assert names[0] == "000_condition.ply" and len(set(names)) == len(names)
+    assert sum(name.endswith("_order.ply") for name in names) >= 100

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import sys
 import time
 from contextlib import contextmanager
@@ -156,13 +157,13 @@ def plan(
             for message in placed.messages:
                 stderr(message)
         stages: dict[str, tuple] = {}
-        counter = iter(range(100))
+        counter = itertools.count()
 
         def dump(stage: str, points, values) -> None:
             if report is not None:
                 stages.setdefault(stage, (points, values))
             if dump_stages is not None:
-                write_ply(dump_stages / f"{next(counter):02d}_{stage}.ply", points, values=values)
+                write_ply(dump_stages / f"{next(counter):03d}_{stage}.ply", points, values=values)
 
         with _progress(enabled=not quiet) as on_stage, _hinted(placed.hints), _candidates_shown(verbose and not quiet):
             if len(placed.frames) > 1:
