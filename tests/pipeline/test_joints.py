@@ -1,8 +1,11 @@
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
 from weldseam.config import JointsConfig
-from weldseam.pipeline.joints import JointKind, NoFit, fit_profile
+from weldseam.pipeline.joints import JointGeometry, JointKind, NoFit, ProfileFit, fit_profile
+from weldseam.pipeline.joints.base import outline_residual
 
 FILLET, V_GROOVE = JointKind.FILLET, JointKind.V_GROOVE
 PARAMS = JointsConfig()
@@ -122,3 +125,31 @@ def test_a_hole_with_vertical_walls_is_not_a_groove(rng):
     assert isinstance(fit_profile(u[seen], w[seen], PARAMS), NoFit)
 
 
+
+
+def test_a_models_outline_residual_is_the_median_distance_of_the_points_around_its_seam():
+    u = np.linspace(-0.02, 0.02, 401)
+    corner = np.abs(u)  # a 90-degree corner at the origin
+    outline = ((-1.0, 1.0), (0.0, 0.0), (1.0, 1.0))
+    assert outline_residual(u, corner, outline, 0.0, 0.012) < 1e-12
+    assert abs(outline_residual(u, corner + 0.001, outline, 0.0, 0.012) - 0.001 / np.sqrt(2)) < 1e-6
+    flat = ((-1.0, 0.0), (1.0, 0.0))  # a plane through the corner explains it worse
+    assert outline_residual(u, corner, flat, 0.0, 0.012) > 0.004
+
+
+def test_of_the_models_that_fit_the_closest_outline_wins_whatever_their_order(monkeypatch, rng):
+    import weldseam.pipeline.joints as joints
+
+    u, w = profile(lambda u: np.abs(u - 0.002), rng)  # a corner at u = 2 mm
+
+    def model(kind, corner_u):
+        def fit(u, w, params):
+            outline = ((corner_u - 1.0, 1.0), (corner_u, 0.0), (corner_u + 1.0, 1.0))
+            return ProfileFit(kind, corner_u, 0.0, 0.0, -1.0, 0.0, JointGeometry(), outline)
+        return SimpleNamespace(KIND=kind, CENTRED=False, fit=fit)
+
+    near, far = model(FILLET, 0.002), model(V_GROOVE, 0.006)
+    for models in ((near, far), (far, near)):
+        monkeypatch.setattr(joints, "MODELS", models)
+        found = joints.fit_profile(u, w, PARAMS)
+        assert found.kind == FILLET and found.residual_m < 0.0005

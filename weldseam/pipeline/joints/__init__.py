@@ -1,19 +1,21 @@
 """Joint models: each fits a cross-section profile and returns the seam point, the torch axis,
 a residual and the measured geometry, or no fit with the reason.
 
-A model is a module with `KIND` (a JointKind) and `fit(u, w, params) -> ProfileFit | NoFit`
-(u ascending). Adding a joint kind means adding one model module and its entry in MODELS.
+A model is a module with `KIND` (a JointKind), `CENTRED` (whether its fit assumes the joint in the
+middle of the section window) and `fit(u, w, params) -> ProfileFit | NoFit` (u ascending), the fit
+with its outline. Adding a joint kind means adding one model module and its entry in MODELS.
 """
 
 from __future__ import annotations
 
 from collections.abc import Collection
+from dataclasses import replace
 
 import numpy as np
 
 from weldseam.pipeline.joints import fillet, v_groove
 from weldseam.config import JointsConfig
-from weldseam.pipeline.joints.base import JointGeometry, JointKind, NoFit, ProfileFit
+from weldseam.pipeline.joints.base import JointGeometry, JointKind, NoFit, ProfileFit, outline_residual
 
 __all__ = ["MODELS", "recentred", "JointGeometry", "JointKind", "NoFit", "ProfileFit", "fit_profile"]
 
@@ -25,21 +27,27 @@ def fit_profile(
     u: np.ndarray, w: np.ndarray, params: JointsConfig, kinds: Collection[JointKind] | None = None
 ) -> ProfileFit | NoFit:
     """The joint in one profile (u lateral, w height out of the work, m), or NoFit with every
-    model's reason; `kinds`: only these models are tried (None: all). The models are tried in
-    MODELS order and the first that fits is the joint."""
+    model's reason; `kinds`: only these models are tried (None: all). Of the models that fit, the
+    one whose outline lies closest to the profile's points around its seam (outline_residual,
+    within face_radius_m + half its opening) is the joint, its residual_m that distance; on a tie,
+    the first in MODELS."""
     if len(u) < MIN_PROFILE_POINTS:
         return NoFit("too few points in the section")
     order = np.argsort(u, kind="stable")
     u, w = u[order], w[order]
-    reasons = []
+    reasons, fits = [], []
     for model in MODELS:
         if kinds is not None and model.KIND not in kinds:
             continue
         found = model.fit(u, w, params)
-        if isinstance(found, ProfileFit):
-            return found
-        reasons.append(f"{model.KIND.value}: {found.reason}")
-    return NoFit("; ".join(reasons))
+        if isinstance(found, NoFit):
+            reasons.append(f"{model.KIND.value}: {found.reason}")
+            continue
+        reach = params.face_radius_m + found.half_opening_m
+        fits.append(replace(found, residual_m=outline_residual(u, w, found.outline, found.u, reach)))
+    if not fits:
+        return NoFit("; ".join(reasons))
+    return min(fits, key=lambda fit: fit.residual_m)
 
 
 def recentred(kind: JointKind) -> bool:

@@ -6,8 +6,10 @@ the work (minus the approximate torch axis). Points come sorted by u.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from enum import Enum
+
+import numpy as np
 
 
 class JointKind(str, Enum):
@@ -32,7 +34,9 @@ class JointGeometry:
 @dataclass(frozen=True)
 class ProfileFit:
     """A joint found in a profile: the seam point (u, w) (m), the unit torch axis (axis_u, axis_w)
-    pointing into the work, the fit's robust residual (m) and the measured geometry."""
+    pointing into the work, the fit's robust residual (m), the measured geometry, and the model's
+    outline: the (u, w) vertices of the surface it fitted, left to right, its first and last
+    segments running on as rays (joints.outline_residual compares models by it)."""
 
     kind: JointKind
     u: float
@@ -41,6 +45,7 @@ class ProfileFit:
     axis_w: float
     residual_m: float
     geometry: JointGeometry
+    outline: tuple[tuple[float, float], ...] = field(default=(), compare=False)
 
     @property
     def half_opening_m(self) -> float:
@@ -53,3 +58,24 @@ class NoFit:
     """No joint in the profile, and why (for the record of rejected candidates)."""
 
     reason: str
+
+
+def outline_residual(u: np.ndarray, w: np.ndarray, outline, centre_u: float, reach_m: float) -> float:
+    """Median distance (m) of the profile points within `reach_m` of `centre_u` (across) to a
+    model's outline (ProfileFit.outline; its end segments run on as rays): how well the model
+    explains the profile around its seam, comparable between models."""
+    near = np.abs(u - centre_u) <= reach_m
+    if len(outline) < 2 or not near.any():
+        return float("inf")
+    points = np.column_stack([u[near], w[near]])
+    vertices = np.asarray(outline, dtype=np.float64)
+    starts, ends = vertices[:-1], vertices[1:]
+    along = ends - starts
+    length_sq = np.maximum(np.einsum("ij,ij->i", along, along), 1e-18)
+    t = np.einsum("pij,ij->pi", points[:, None, :] - starts[None], along) / length_sq
+    low = np.full(len(starts), 0.0)
+    high = np.full(len(starts), 1.0)
+    low[0], high[-1] = -np.inf, np.inf  # the end segments run on
+    closest = starts[None] + np.clip(t, low, high)[:, :, None] * along[None]
+    distance = np.linalg.norm(points[:, None, :] - closest, axis=2).min(axis=1)
+    return float(np.median(distance))

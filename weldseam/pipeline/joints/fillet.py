@@ -66,7 +66,9 @@ def fit(u: np.ndarray, w: np.ndarray, params: JointsConfig) -> ProfileFit | NoFi
     axis = -unit(to_left + to_right)
     residual_m = float(np.sqrt(max(error[best], 0.0) / n))
     geometry = JointGeometry(included_deg=float(included), legs_m=(leg_left, leg_right))
-    return ProfileFit(KIND, float(corner_u), float(corner_w), float(axis[0]), float(axis[1]), residual_m, geometry)
+    outline = ((corner_u - 1.0, corner_w - b1), (corner_u, corner_w), (corner_u + 1.0, corner_w + b2))
+    return ProfileFit(KIND, float(corner_u), float(corner_w), float(axis[0]), float(axis[1]), residual_m, geometry,
+                      tuple((float(a), float(b)) for a, b in outline))  # fmt: skip
 
 
 def _face_extent(u, w, corner_u, corner_w, direction) -> float:

@@ -55,7 +55,7 @@ def fit(u: np.ndarray, w: np.ndarray, params: JointsConfig) -> ProfileFit | NoFi
     edges = _groove_edges(u, depth, groove, u[left_surface].max(), u[right_surface].min(), slope)
     if isinstance(edges, NoFit):
         return edges
-    u_left, u_right, slopes = edges
+    u_left, u_right, slopes, bottom_u = edges
     # The surface beside the seam, within face_radius of each edge, sets the torch axis.
     face = params.face_radius_m
     beside = on_surface & (((u >= u_left - face) & (u <= u_left)) | ((u >= u_right) & (u <= u_right + face)))
@@ -66,7 +66,11 @@ def fit(u: np.ndarray, w: np.ndarray, params: JointsConfig) -> ProfileFit | NoFi
     walls = [abs(s) for s in slopes if s is not None]
     included = 180.0 - float(np.degrees(np.arctan(walls).sum())) if len(walls) == 2 else None
     geometry = JointGeometry(opening_m=u_right - u_left, depth_m=deepest, included_deg=included)
-    return ProfileFit(KIND, centre_u, intercept + slope * centre_u, slope / norm, -1.0 / norm, sigma, geometry)
+    # The surface beside the edges, the walls down to the bottom (a metre of ray each side).
+    outline_u = np.array([u_left - 1.0, u_left, bottom_u, u_right, u_right + 1.0])
+    outline_w = intercept + slope * outline_u - np.array([0.0, 0.0, deepest, 0.0, 0.0])
+    return ProfileFit(KIND, centre_u, intercept + slope * centre_u, slope / norm, -1.0 / norm, sigma, geometry,
+                      tuple(zip(outline_u.tolist(), outline_w.tolist())))  # fmt: skip
 
 
 def surface_line(u: np.ndarray, w: np.ndarray, min_depth_m: float):
@@ -101,8 +105,8 @@ def _largest_run(u: np.ndarray, deep: np.ndarray) -> np.ndarray:
 
 
 def _groove_edges(u, depth, groove, left_surface_end, right_surface_end, surface_slope: float):
-    """(left edge, right edge, [left wall slope, right wall slope]) where each groove wall meets
-    the surface (depth 0), or NoFit when neither wall is seen: a bevelled wall facing the camera
+    """(left edge, right edge, [left wall slope, right wall slope], bottom u) where each groove
+    wall meets the surface (depth 0), and where the groove is deepest, or NoFit when neither wall is seen: a bevelled wall facing the camera
     is always visible, so a depression with two hidden (vertical) walls is a hole or a slot, not
     a V-groove.
 
@@ -149,7 +153,7 @@ def _groove_edges(u, depth, groove, left_surface_end, right_surface_end, surface
     for side, edge, other, unseen in zip((-1, 1), edges, edges[::-1], at_surface_end):
         if unseen and side * (edge - (2 * foot - other)) > HIDDEN_EDGE_SLACK_M:
             return NoFit("a hidden groove wall's edge lies beyond the other's mirror image (a dropout)")
-    return edges[0], edges[1], slopes
+    return edges[0], edges[1], slopes, bottom
 
 
 def _wall_slope(u: np.ndarray, depth: np.ndarray, side: int) -> float | None:
