@@ -84,6 +84,10 @@ class SegmentConfig:
     min_density: float = _param(
         0.25, "valleys: a point counts when this share of its neighbours bends the same way (noise is scattered)"
     )
+    occluded_ends: bool = _param(
+        True, "a single view: also take surface ends past which the camera sees a wall's top (a T-joint seen from "
+        "above, its web's face too oblique to measure) as candidates"
+    )
     cluster_tolerance_m: float = _param(0.006, "Euclidean clustering distance between seam points")
     min_seam_length_m: float = _param(0.02, "candidate creases shorter than this are not traced")
 

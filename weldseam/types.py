@@ -69,6 +69,9 @@ class WeldPath:
     closed: the seam is a loop (the last pose joins the first).
     joint: "v_groove" or "fillet".
     confidence: 0..1, how sure the detector is that this is a weld seam.
+    pose_confidence: (K,) 0..1 per pose, how sure its position and axis are (1: its cross-section
+        fitted the joint; less where a face was unseen, a dropout bridged, a hole interpolated, or
+        the fit was rough); None: all 1.
     """
 
     seam_id: int
@@ -77,6 +80,7 @@ class WeldPath:
     closed: bool = False
     joint: str = "v_groove"
     confidence: float = 1.0
+    pose_confidence: np.ndarray | None = None
 
     @property
     def length_m(self) -> float:

@@ -66,7 +66,7 @@ def test_json_layout():
         0, False, "v_groove", 0.931234568)
     assert (ring["id"], ring["closed"], ring["joint"]) == (1, True, "fillet")
     assert ring["length_m"] == pytest.approx(result.paths[1].length_m, abs=1e-9)
-    assert list(first["poses"][0]) == ["x", "y", "z", "qx", "qy", "qz", "qw", "rx", "ry", "rz"]
+    assert list(first["poses"][0]) == ["x", "y", "z", "qx", "qy", "qz", "qw", "rx", "ry", "rz", "confidence"]
     assert len(first["poses"]) == 21 and len(ring["poses"]) == 16
 
 

@@ -3,7 +3,8 @@
 import numpy as np
 
 from weldseam.geometry import unit
-from weldseam.pipeline.resample import resample_seam
+from weldseam.pipeline.resample import resample_flags, resample_seam
+from weldseam.pipeline.section import PointFlag, pose_confidence
 
 
 def line(step_m=0.0013, length_m=0.1):
@@ -56,3 +57,19 @@ def test_a_closed_circle_stays_closed_and_round():
     assert np.abs(np.linalg.norm(new[:, :2], axis=1) - radius).max() < 0.00015
     tangents = np.column_stack([-np.sin(np.arctan2(new[:, 1], new[:, 0])), np.cos(np.arctan2(new[:, 1], new[:, 0]))])
     assert np.all(np.einsum("ij,ij->i", frames[:, :2, 1], tangents) > np.cos(np.radians(1.0)))
+
+
+def test_each_pose_takes_the_flags_of_the_seam_points_around_it():
+    positions = np.column_stack([np.arange(0.0, 0.02, 0.002), np.zeros(10), np.zeros(10)])
+    flags = np.zeros(10, np.uint8)
+    flags[4] = PointFlag.BRIDGED  # the point at 8 mm
+    posed = resample_flags(positions, flags, spacing_m=0.001, closed=False)
+    along = np.linspace(0.0, 0.018, len(posed))
+    # the poses on the two segments that meet at it (one at the point before counts the segment after it)
+    assert np.all((posed == PointFlag.BRIDGED) == ((along > 0.006 - 1e-9) & (along < 0.010 - 1e-9)))
+    assert np.allclose(pose_confidence(posed), np.where(posed, 0.5, 1.0))
+
+
+def test_a_pose_is_as_sure_as_the_least_sure_of_its_flags():
+    both = np.array([PointFlag.ONE_FACE | PointFlag.INTERPOLATED, PointFlag.ROUGH, 0], np.uint8)
+    assert pose_confidence(both).tolist() == [0.3, 0.6, 1.0]

@@ -96,3 +96,23 @@ def test_a_box_on_the_table_is_not_a_fillet_but_on_a_flange_it_is(rng):
     with pytest.raises(NoSeamError):
         plan(on_table, [0.0, 0.3, 0.3])
     assert [p.joint for p in plan(fillet_cloud(rng), [0.0, 0.3, 0.3]).paths] == ["fillet"]
+
+
+def test_a_t_joint_seen_from_above_is_found_where_the_flange_ends_under_the_web(rng):
+    """The camera looks down a T-joint's web: its face at y = 0 is seen edge-on (88 degrees of
+    incidence) and has no points; the flange (z = 0, 0 < y < 80 mm) ends at its foot, the web's top
+    is 50 mm up, the table 10 mm down beyond the flange. The seam is the corner y = 0, z = 0."""
+    pitch = 0.0007
+    x, y = (a.ravel() for a in np.meshgrid(np.arange(-0.1, 0.1, pitch), np.arange(-0.01, 0.1, pitch)))
+    z = np.select([y < 0.0, y <= 0.08], [0.05, 0.0], -0.01)
+    points = np.column_stack([x, y, z + rng.normal(0.0, 0.0003, len(x))])
+    result = plan(points, [0.0, 0.01, 0.45])
+    (path,) = result.paths
+    assert path.joint == "fillet"
+    inside = np.abs(path.positions_m[:, 0]) < 0.08
+    assert inside.sum() > 60 and np.abs(path.positions_m[:, 0]).max() > 0.085  # the whole corner
+    assert np.abs(path.positions_m[inside, 1]).max() < 0.0008 and np.abs(path.positions_m[inside, 2]).max() < 0.0008
+    bisector = np.array([0.0, -1.0, -1.0]) / np.sqrt(2)
+    assert np.degrees(np.arccos(path.rotations[inside, :, 2] @ bisector)).max() < 3.0
+    assert any("one face of the corner was not seen" in w for w in result.warnings)
+    assert np.mean(path.pose_confidence[inside] == 0.7) > 0.9  # each pose says its face was unseen

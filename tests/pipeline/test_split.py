@@ -1,7 +1,10 @@
+from dataclasses import replace
+
 import numpy as np
 
 from tests.pipeline.test_join import line, piece
 from weldseam.config import SplitConfig
+from weldseam.pipeline.section import PointFlag
 from weldseam.pipeline.split import split_at_junctions, split_seams
 
 
@@ -18,3 +21,11 @@ def test_a_stub_too_short_to_be_a_seam_does_not_split_one():
     stub = piece(line([0.05, 0.003, 0], [0.05, 0.0205, 0]))  # 17.5 mm: past a branch's 15, short of a seam's 20
     seams = split_seams([through, stub], [], SplitConfig(), step_m=0.002)
     assert len(seams) == 1 and np.array_equal(seams[0].positions_m, through.positions_m)
+
+
+def test_a_seam_mostly_interpolated_across_a_hole_is_not_a_seam():
+    seam = piece(line([0, 0, 0], [0.036, 0, 0]))
+    flags = np.zeros(len(seam.positions_m), np.uint8)
+    flags[3:15] = PointFlag.INTERPOLATED  # 23 mm of its 36 bridged a hole: 13 mm seen
+    assert split_seams([replace(seam, flags=flags)], [], SplitConfig(), step_m=0.002) == []
+    assert len(split_seams([seam], [], SplitConfig(), step_m=0.002)) == 1

@@ -8,6 +8,8 @@ decimals (1 nm), so the same result always gives the same bytes.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import io
 import json
 import sys
@@ -62,7 +64,9 @@ def format_path_json(result: RunResult) -> bytes:
         }),
     }
     for seam, path in zip(document["seams"], result.paths):
-        seam["poses"] = [dict(zip(POSE_KEYS, row)) for row in _pose_table(path).tolist()]
+        confidence = np.ones(len(path.positions_m)) if path.pose_confidence is None else path.pose_confidence
+        seam["poses"] = [{**dict(zip(POSE_KEYS, row)), "confidence": round(float(c), 3)}
+                         for row, c in zip(_pose_table(path).tolist(), confidence)]  # fmt: skip
     text = json.dumps(document, indent=2, ensure_ascii=False, allow_nan=False)
     return (text + "\n").encode("utf-8")
 
@@ -247,9 +251,10 @@ def _read_json(text: str, path: Path) -> list[WeldPath]:
                 f"{path}: seam {seam_id}: poses must be a list of objects with numbers "
                 f"{', '.join(POSE_KEYS[:7])}"
             ) from None
-        paths.append(_weld_path(
+        pose_confidence = np.array([pose.get("confidence", 1.0) for pose in seam["poses"]], dtype=np.float64)
+        paths.append(replace(_weld_path(
             path, seam_id, table, "quat", closed=closed, joint=joint, confidence=float(confidence),
-        ))
+        ), pose_confidence=pose_confidence))
     return paths
 
 

@@ -20,6 +20,8 @@ default `+x`, and a decision never rests on a difference the noise of a scan cou
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from weldseam.config import DirectionConfig
@@ -88,7 +90,5 @@ def _decisive(candidates: list[np.ndarray], measure, scale: float) -> np.ndarray
 def _reordered(path: WeldPath, order: np.ndarray, reverse: bool) -> WeldPath:
     """The path's poses in `order`; `reverse`: travelling the other way (y and x turn over)."""
     rotations = path.rotations[order] * _REVERSED_FRAME if reverse else path.rotations[order]
-    return WeldPath(
-        seam_id=path.seam_id, positions_m=path.positions_m[order], rotations=rotations, closed=path.closed,
-        joint=path.joint, confidence=path.confidence,
-    )
+    confidence = None if path.pose_confidence is None else path.pose_confidence[order]
+    return replace(path, positions_m=path.positions_m[order], rotations=rotations, pose_confidence=confidence)

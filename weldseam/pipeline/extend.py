@@ -136,6 +136,7 @@ def _extended(seam: TracedSeam, start: list[Step], start_stop, end: list[Step], 
         np.array([f.point_m for f in before] + list(seam.positions_m) + [f.point_m for f in after]),
         np.array([f.torch_axis for f in before] + list(seam.torch_axes) + [f.torch_axis for f in after]),
         False, seam.joint, seam.confidence, (*seam.holes, *holes), sources=seam.sources,
+        flags=np.array([f.flags for f in before] + list(seam.point_flags) + [f.flags for f in after], np.uint8),
     )
 
 

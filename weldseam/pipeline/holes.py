@@ -9,7 +9,7 @@ from weldseam.geometry import arc_lengths, polyline_length, unit
 from weldseam.pipeline.bridge import groove_bottom, sees_past_end
 from weldseam.pipeline.ends import ahead, end_curve
 from weldseam.pipeline.joints import JointGeometry, JointKind
-from weldseam.pipeline.section import SectionFit
+from weldseam.pipeline.section import PointFlag, SectionFit
 from weldseam.pipeline.seek import Extension, next_fit, offsets, plain_fit
 from weldseam.pipeline.trace import Hole
 
@@ -90,7 +90,9 @@ def _bridge(extension: Extension, last_point, last_axis, leaving, run: list[Sect
     weights = np.linspace(0.0, 1.0, len(bridge) + 2)[1:-1, None]
     tilts = unit((1 - weights) * last_axis + weights * fit.torch_axis)
     geometry = JointGeometry(opening_m=2 * fit.half_opening_m)
-    return [SectionFit(extension.joint, p, a, geometry, bridged=True) for p, a in zip(bridge, tilts)] + run
+    interpolated = int(PointFlag.INTERPOLATED)
+    return [SectionFit(extension.joint, p, a, geometry, bridged=True, flags=interpolated)
+            for p, a in zip(bridge, tilts)] + run  # fmt: skip
 
 
 def _part_ends_after(extension: Extension, fit, travel, last_point, last_axis, direction) -> bool:

@@ -52,8 +52,7 @@ def trim_overlaps(seams: list[TracedSeam], *, tolerance_m: float) -> list[Traced
         runs = np.split(np.flatnonzero(~covered), np.flatnonzero(np.diff(np.flatnonzero(~covered)) > 1) + 1)
         for run in runs:
             if len(run) >= 2:
-                keep(TracedSeam(seam.positions_m[run], seam.torch_axes[run], False, seam.joint, seam.confidence,
-                                 sources=seam.sources))
+                keep(seam.part(run))
     return kept
 
 
@@ -130,6 +129,8 @@ def _joined(
                 continue
             axes_a = first.torch_axes[::-1] if first_reversed else first.torch_axes
             axes_b = second.torch_axes[::-1] if second_reversed else second.torch_axes
+            flags_a = first.point_flags[::-1] if first_reversed else first.point_flags
+            flags_b = second.point_flags[::-1] if second_reversed else second.point_flags
             weight = len(a) / (len(a) + len(b))
             long_enough = min(polyline_length(a), polyline_length(b)) >= END_BASELINE_M
             corner = bend_corner(a[-1], out_a, b[0], out_b, join_m) if long_enough else None
@@ -142,6 +143,7 @@ def _joined(
                 joint=first.joint,
                 confidence=round(weight * first.confidence + (1 - weight) * second.confidence, 3),
                 sources=first.sources | second.sources,
+                flags=np.concatenate([flags_a, np.zeros(len(bend_points), np.uint8), flags_b]),
             ))
     return best
 
@@ -166,4 +168,4 @@ def _closed_if_ends_meet(seam: TracedSeam, join_m: float, cos_turn: float) -> Tr
     meets = np.linalg.norm(gap) <= join_m and -out_end @ out_start >= cos_turn and length > 4 * join_m
     if not meets:
         return seam
-    return TracedSeam(points, seam.torch_axes, True, seam.joint, seam.confidence, sources=seam.sources)
+    return seam.part(slice(None), closed=True)

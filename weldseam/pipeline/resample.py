@@ -71,3 +71,21 @@ def hole_warning(seam_id: int, hole) -> str:
     x, y, z = hole.middle_m
     return (f"seam {seam_id}: {hole.length_m * 1000:.0f} mm interpolated across a hole in the scan "
             f"(no data on the seam) around ({x:.3f}, {y:.3f}, {z:.3f}) m")  # fmt: skip
+
+
+def resample_flags(positions: np.ndarray, flags: np.ndarray, *, spacing_m: float, closed: bool) -> np.ndarray:
+    """(K,) the flags of the poses resample_seam places along `positions` (the same samples): each
+    pose takes the bits of the two seam points around it (an OR)."""
+    arc = arc_lengths(positions, closed)
+    total = arc[-1]
+    count = max(int(round(total / spacing_m)), 1)
+    samples = np.linspace(0.0, total, count, endpoint=False) if closed else np.linspace(0.0, total, count + 1)
+    knots = np.r_[flags, flags[:1]] if closed else flags
+    after = np.clip(np.searchsorted(arc, samples, side="right"), 0, len(knots) - 1)
+    return knots[after] | knots[np.maximum(after - 1, 0)]
+
+
+def one_face_warning(seam_id: int, length_m: float) -> str:
+    """The warning for a corner seen with one face only over `length_m` of seam `seam_id`."""
+    return (f"seam {seam_id}: one face of the corner was not seen over {length_m * 1000:.0f} mm (seen too "
+            "obliquely): the corner is placed where the other face ends, under the wall's top")

@@ -21,11 +21,12 @@ from weldseam import __version__
 from weldseam.config import PlanConfig, config_to_dict
 from weldseam.errors import InputError, NoSeamError, StageError, WeldseamError
 from weldseam.pipeline import boundary, candidates, condition, descriptor, extend, grid, join, normals, order
-from weldseam.pipeline import direction, pairing, probe, resample, segment, smooth, split, support, thinning, trace
+from weldseam.pipeline import direction, occlusion, one_face, pairing, probe, resample, segment, smooth, split, support
+from weldseam.pipeline import thinning, trace
 from weldseam.pipeline.candidates import Candidate, Rejection
 from weldseam.pipeline.neighbours import pairs_among, pairs_graph, radius_graph, radius_pairs
 from weldseam.pipeline.parallel import in_background, worker_process
-from weldseam.pipeline.section import FineSurface, section_params
+from weldseam.pipeline.section import FineSurface, PointFlag, pose_confidence, section_params
 from weldseam.types import RunResult, Scan, WeldPath
 
 MIN_POINTS = 100
@@ -60,6 +61,7 @@ class PlanState:
     valley_threshold: float | None = None
     clusters: list = field(default_factory=list)
     creases: list = field(default_factory=list)
+    view: occlusion.ViewBuffer | None = None
     working_tree: object = None
     support: tuple | None = None
     # boundary, pairing, thinning, grid, order
@@ -153,11 +155,27 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
             found, too_short = _clusters(state, c, segment.dense_selection(graph, side, c.segment.min_density))
             state.creases += found
             short += too_short
+    if c.segment.occluded_ends and state.scan.camera_origin_m is not None and state.camera.ndim == 1:
+        found, too_short = _clusters(state, c, _occluded_ends(state, c))
+        state.creases += found
+        short += too_short
     state.short_candidates = [replace(candidates.cluster_candidate(state.working[members]), rejection=Rejection.TOO_SHORT)
                               for members in short]  # fmt: skip
     state.working_tree = cKDTree(state.working)
     chosen = [*state.clusters, *state.creases]
     state.dump("segment", state.working[np.concatenate(chosen)] if chosen else np.empty((0, 3)), None)
+
+
+def _occluded_ends(state: PlanState, c: PlanConfig) -> np.ndarray:
+    """The rims of surfaces past whose end the camera sees a wall's top (occlusion.occluded_rims):
+    where a T-joint's flange meets a web whose face is too oblique to be seen. The view buffer is
+    kept for the sections (one_face)."""
+    state.view = occlusion.ViewBuffer.build(state.fine, state.camera, c.condition.voxel_m)
+    shift = boundary.inward_shift(state.working, state.normals, state.neighbourhoods(c.boundary.radius_m))
+    return occlusion.occluded_rims(
+        state.working, shift, state.view, radius_m=c.boundary.radius_m, shift_ratio=c.boundary.shift_ratio,
+        past_m=one_face.PAST_END_M, margin_m=c.joints.fillet_min_leg_m,
+    )
 
 
 def _crease_threshold(c: PlanConfig, variant: str) -> float:
@@ -244,7 +262,7 @@ def _order(state: PlanState, c: PlanConfig) -> None:
 def _probe(state: PlanState, c: PlanConfig) -> None:
     """A few sections on every chain (the first step on the fine surface: the worker process
     that shares its sections starts here and stays until the run ends)."""
-    state.surface = FineSurface(state.fine, state.fine_tree.result(), section_params(c))
+    state.surface = FineSurface(state.fine, state.fine_tree.result(), section_params(c), state.view)
     state.resources.enter_context(worker_process(state.surface))
     state.approx_axes = probe.approximate_torch_axes(
         [chain.points for chain in state.chains], state.normals, state.working_tree, c.joints.face_radius_m
@@ -296,17 +314,23 @@ def _split(state: PlanState, c: PlanConfig) -> None:
 
 
 def _resample(state: PlanState, c: PlanConfig) -> None:
-    """Poses every resample.spacing_m along each seam; a warning for each hole crossed."""
+    """Poses every resample.spacing_m along each seam, each with its confidence; a warning for
+    each hole crossed and for a corner with one face unseen."""
+    spacing = c.resample.spacing_m
     for seam in state.seams:
         positions, rotations = resample.resample_seam(
-            seam.positions_m, seam.torch_axes, spacing_m=c.resample.spacing_m,
-            smoothing_m=c.resample.smoothing_m, closed=seam.closed,
+            seam.positions_m, seam.torch_axes, spacing_m=spacing, smoothing_m=c.resample.smoothing_m,
+            closed=seam.closed,
         )
+        flags = resample.resample_flags(seam.positions_m, seam.point_flags, spacing_m=spacing, closed=seam.closed)
         seam_id = len(state.paths)
         state.warnings += [resample.hole_warning(seam_id, hole) for hole in seam.holes]
+        unseen = np.count_nonzero(flags & PointFlag.ONE_FACE) * spacing
+        if unseen:
+            state.warnings.append(resample.one_face_warning(seam_id, unseen))
         state.paths.append(WeldPath(
             seam_id=seam_id, positions_m=positions, rotations=rotations, closed=seam.closed,
-            joint=seam.joint.value, confidence=seam.confidence,
+            joint=seam.joint.value, confidence=seam.confidence, pose_confidence=pose_confidence(flags),
         ))
     state.chain_candidates = [
         replace(candidate, seam=next((k for k, seam in enumerate(state.seams) if index in seam.sources), None))

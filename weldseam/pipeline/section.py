@@ -10,12 +10,15 @@ from __future__ import annotations
 
 from collections.abc import Collection
 from dataclasses import dataclass, field
+from enum import IntFlag
 
 import numpy as np
 
 from weldseam.config import JointsConfig, PlanConfig
 from weldseam.geometry import unit
 from weldseam.pipeline.joints import JointGeometry, JointKind, ProfileFit, fit_profile, recentred
+from weldseam.pipeline.occlusion import ViewBuffer
+from weldseam.pipeline.one_face import one_face_corner
 from weldseam.pipeline.parallel import map_shared
 
 # A fit of a kind that assumes the joint in the middle of its window (joints.recentred) made
@@ -47,11 +50,37 @@ def section_params(config: PlanConfig) -> SectionParams:
     )
 
 
+class PointFlag(IntFlag):
+    """What a seam point rests on besides a full fit of its section: one face of a corner unseen
+    (one_face), a groove bridged over a dropout from the edges still seen (bridge), a stretch
+    interpolated across a hole in the scan (holes)."""
+
+    ONE_FACE = 1
+    BRIDGED = 2
+    INTERPOLATED = 4
+    ROUGH = 8  # the model's outline lies ROUGH_FIT_M or more from the section's points (median)
+
+
+# How sure a pose is, by the least sure of what its point rests on (1: a full fit of its section).
+POSE_CONFIDENCE = {PointFlag.ROUGH: 0.6, PointFlag.ONE_FACE: 0.7, PointFlag.BRIDGED: 0.5,
+                   PointFlag.INTERPOLATED: 0.3}  # fmt: skip
+ROUGH_FIT_M = 0.0008
+
+
+def pose_confidence(flags: np.ndarray) -> np.ndarray:
+    """(K,) confidence 0..1 of poses with PointFlag bits `flags` (K,): the least of POSE_CONFIDENCE
+    over the bits set, 1 with none."""
+    confidence = np.ones(len(flags))
+    for flag, value in POSE_CONFIDENCE.items():
+        confidence = np.where(flags & flag, np.minimum(confidence, value), confidence)
+    return confidence
+
+
 @dataclass(frozen=True)
 class SectionFit:
     """One cross-section's result in 3D: the joint kind (None: no fit), the seam point (3,) (m),
     the unit torch axis (3,) into the work, the measured geometry, whether it was bridged over a
-    dropout (weldseam.pipeline.bridge) and, with no fit, why."""
+    dropout (weldseam.pipeline.bridge) and, with no fit, why; flags: PointFlag bits."""
 
     kind: JointKind | None
     point_m: np.ndarray
@@ -59,6 +88,7 @@ class SectionFit:
     geometry: JointGeometry = field(default_factory=JointGeometry)
     bridged: bool = False
     reason: str = ""
+    flags: int = 0
 
     @property
     def half_opening_m(self) -> float:
@@ -84,7 +114,9 @@ class Profile:
             return SectionFit(None, self.centre, self.axis, reason=reason)
         point = self.centre + fit.u * self.lateral - fit.w * self.axis
         torch_axis = unit(fit.axis_u * self.lateral - fit.axis_w * self.axis)
-        return SectionFit(fit.kind, point, torch_axis, fit.geometry, bridged)
+        flags = ((PointFlag.ONE_FACE if fit.geometry.faces_seen == 1 else 0) | (PointFlag.BRIDGED if bridged else 0)
+                 | (PointFlag.ROUGH if fit.residual_m >= ROUGH_FIT_M else 0))  # fmt: skip
+        return SectionFit(fit.kind, point, torch_axis, fit.geometry, bridged, flags=int(flags))
 
 
 @dataclass(frozen=True, eq=False)
@@ -96,6 +128,21 @@ class FineSurface:
     points: np.ndarray
     tree: object
     params: SectionParams
+    view: ViewBuffer | None = None
+
+    def sight(self, profile: Profile, u: float, w: float) -> tuple[float, float] | None:
+        """(u, w) of the wall top the camera sees past the profile point (u, w): the nearest scan
+        point on the line of sight through it, at least a fillet leg nearer to the camera; the
+        near edge of that surface in the section when it lies in the section's slab. None
+        without a single camera (view) or when nothing is nearer."""
+        if self.view is None:
+            return None
+        point = profile.centre + u * profile.lateral - w * profile.axis
+        index = self.view.nearer_than(point[None], self.params.joints.fillet_min_leg_m)[0]
+        if index < 0:
+            return None
+        offset = self.view.points[index] - profile.centre
+        return float(offset @ profile.lateral), float(-(offset @ profile.axis))
 
     def profile(self, centre, travel, axis, lateral) -> Profile:
         """The section at `centre` across unit `travel`, in the frame (axis, lateral) given.
@@ -122,11 +169,24 @@ class FineSurface:
         return self.fit_profile(self.profile(centre, travel, *section_frame(travel, axis)), kinds)
 
     def fit_profile(self, profile: Profile, kinds: Collection[JointKind] | None = None) -> SectionFit:
-        """fit_profile of a section's points, in 3D."""
+        """fit_profile of a section's points, in 3D; where no model fits and an inside corner may
+        be sought, an inside corner with one face unseen (one_face.one_face_corner)."""
         found = fit_profile(profile.u, profile.w, self.params.joints, kinds)
         if isinstance(found, ProfileFit):
             return profile.to_3d(found)
+        if self.view is not None and (kinds is None or JointKind.FILLET in kinds):
+            corner = self._one_face(profile)
+            if corner is not None:
+                return profile.to_3d(corner)
         return profile.to_3d(None, reason=found.reason)
+
+    def _one_face(self, profile: Profile) -> ProfileFit | None:
+        toward = unit(self.view.camera_m - profile.centre)
+        order = np.argsort(profile.u, kind="stable")
+        return one_face_corner(
+            profile.u[order], profile.w[order], float(toward @ profile.lateral), float(-(toward @ profile.axis)),
+            lambda u, w: self.sight(profile, u, w), self.params.joints, self.params.half_width_m,
+        )
 
     def fit_many(self, centres, travel, axes, lateral, kinds: Collection[JointKind] | None = None) -> list[SectionFit]:
         """One fit per section (centres, travel, axes, lateral: (K, 3) each, a frame per row, as

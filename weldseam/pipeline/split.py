@@ -14,15 +14,26 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from weldseam.config import SplitConfig
+from weldseam.pipeline.section import PointFlag
 from weldseam.pipeline.trace import Hole, TracedSeam
 
 
 def split_seams(seams: list[TracedSeam], holes: list[Hole], params: SplitConfig, step_m: float) -> list[TracedSeam]:
-    """The seams without fragments, split at junctions, each long enough and with the holes whose
-    middle lies within `step_m` (the spacing of the points bridged across them) of one of its points."""
+    """The seams without fragments, split at junctions, each seen over min_seam_length_m (what was
+    interpolated across holes does not count) and with the holes whose middle lies within `step_m`
+    (the spacing of the points bridged across them) of one of its points."""
     seams = [seam for seam in seams if seam.length_m >= max(params.min_branch_m, params.min_seam_length_m)]
     seams = split_at_junctions(seams, tolerance_m=params.junction_m)
-    return [_with_holes(seam, holes, step_m) for seam in seams if seam.length_m >= params.min_seam_length_m]
+    return [_with_holes(seam, holes, step_m) for seam in seams if seen_length(seam) >= params.min_seam_length_m]
+
+
+def seen_length(seam: TracedSeam) -> float:
+    """Arc length (m) of the seam's segments whose two ends were seen (not interpolated across a hole)."""
+    points = np.vstack([seam.positions_m, seam.positions_m[:1]]) if seam.closed else seam.positions_m
+    flags = np.r_[seam.point_flags, seam.point_flags[:1]] if seam.closed else seam.point_flags
+    seen = (flags & PointFlag.INTERPOLATED) == 0
+    steps = np.linalg.norm(np.diff(points, axis=0), axis=1)
+    return float(steps[seen[:-1] & seen[1:]].sum())
 
 
 def split_at_junctions(seams: list[TracedSeam], *, tolerance_m: float) -> list[TracedSeam]:
@@ -43,10 +54,7 @@ def split_at_junctions(seams: list[TracedSeam], *, tolerance_m: float) -> list[T
             if seam.closed or not inner.any():
                 continue
             cut = int(nearest[inner][0])
-            head = TracedSeam(seam.positions_m[: cut + 1], seam.torch_axes[: cut + 1], False, seam.joint, seam.confidence,
-                              sources=seam.sources)
-            tail = TracedSeam(seam.positions_m[cut:], seam.torch_axes[cut:], False, seam.joint, seam.confidence,
-                              sources=seam.sources)
+            head, tail = seam.part(slice(None, cut + 1)), seam.part(slice(cut, None))
             result[index : index + 1] = [head, tail]
             changed = True
             break

@@ -38,8 +38,8 @@ class Hole:
 class TracedSeam:
     """Seam points (K, 3) and torch axes (K, 3) in travel order, the joint, how sure the trace is
     (0..1), the holes in the scan the seam was interpolated across (weldseam.pipeline.extend),
-    for a groove, the median half-width of its opening (m) as traced, and the candidates (chain
-    indices) it was traced from."""
+    for a groove, the median half-width of its opening (m) as traced, the candidates (chain
+    indices) it was traced from, and each point's PointFlag bits (None: none)."""
 
     positions_m: np.ndarray
     torch_axes: np.ndarray
@@ -49,6 +49,18 @@ class TracedSeam:
     holes: tuple[Hole, ...] = ()
     half_opening_m: float = 0.0
     sources: frozenset[int] = frozenset()
+    flags: np.ndarray | None = None
+
+    @property
+    def point_flags(self) -> np.ndarray:
+        """(K,) the PointFlag bits of each point (section.PointFlag)."""
+        return np.zeros(len(self.positions_m), np.uint8) if self.flags is None else self.flags
+
+    def part(self, index, closed: bool = False) -> TracedSeam:
+        """The seam's points at `index` (a slice or index array) as a seam of their own (open unless
+        `closed`; the holes it crossed are not carried)."""
+        return TracedSeam(self.positions_m[index], self.torch_axes[index], closed, self.joint, self.confidence,
+                          sources=self.sources, flags=self.point_flags[index])  # fmt: skip
 
     @property
     def length_m(self) -> float:
@@ -88,6 +100,7 @@ def trace_chain(
                 joint=joint,
                 confidence=round(confidence, 3),
                 half_opening_m=float(np.median([fit.half_opening_m for fit in run_fits])),
+                flags=np.array([fit.flags for fit in run_fits], np.uint8),
             )
         )
     return seams

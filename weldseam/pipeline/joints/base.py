@@ -23,12 +23,14 @@ class JointKind(str, Enum):
 class JointGeometry:
     """What a fit measured of the joint (None: not measured for this kind): the opening's width
     at the surface (m), the depth below the surface (m), the included angle between the two
-    walls or faces (degrees) and the two legs (m, left and right of the seam)."""
+    walls or faces (degrees), the two legs (m, left and right of the seam), and how many of the
+    joint's two faces the scan saw (one: the other was placed from what the camera saw past it)."""
 
     opening_m: float | None = None
     depth_m: float | None = None
     included_deg: float | None = None
     legs_m: tuple[float, float] | None = None
+    faces_seen: int = 2
 
 
 @dataclass(frozen=True)

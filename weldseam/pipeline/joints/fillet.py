@@ -21,7 +21,7 @@ CENTRED = False
 MIN_INCLUDED_DEG = 45.0
 MAX_INCLUDED_DEG = 135.0
 # A face is only as long as the stretch its points fill with gaps of at most this.
-MAX_FACE_SPACING_M = 0.002
+MAX_FACE_SPACING_M = 0.004
 
 
 def fit(u: np.ndarray, w: np.ndarray, params: JointsConfig) -> ProfileFit | NoFit:

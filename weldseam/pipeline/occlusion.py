@@ -1,0 +1,94 @@
+"""What the camera sees along a line of sight: the scan as a depth buffer around the camera.
+
+Every point of a single-view scan lies on a line of sight from the camera origin. Binned by
+direction (angles about the mean viewing direction), the nearest point per bin is what the
+camera saw that way. Where a surface of the scan ends, the buffer tells whether the line of
+sight past its end meets something nearer (an occluder: the top of a wall whose face the camera
+saw too obliquely to measure) or not (the part's edge, a dropout).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from weldseam.geometry import unit
+
+
+@dataclass(frozen=True, eq=False)
+class ViewBuffer:
+    """The nearest scan point per direction bin seen from `camera_m` (3,).
+
+    frame: (3, 3) rows x, y, z, z the mean viewing direction; bin_rad: the angular bin;
+    keys: sorted bin keys (K,); nearest: (K,) index into `points` of the nearest point in each bin.
+    """
+
+    camera_m: np.ndarray
+    points: np.ndarray
+    frame: np.ndarray
+    bin_rad: float
+    keys: np.ndarray
+    nearest: np.ndarray
+
+    @classmethod
+    def build(cls, points: np.ndarray, camera_m: np.ndarray, spacing_m: float) -> ViewBuffer:
+        """The buffer of `points` (N, 3) seen from `camera_m`, with bins of the angle a point
+        spacing of `spacing_m` subtends at the median range."""
+        offsets = points - camera_m
+        ranges = np.linalg.norm(offsets, axis=1)
+        z = unit(offsets.mean(axis=0))
+        x = unit(np.cross([0.0, 1.0, 0.0] if abs(z[1]) < 0.9 else [1.0, 0.0, 0.0], z))
+        frame = np.stack([x, np.cross(z, x), z])
+        bin_rad = spacing_m / float(np.median(ranges))
+        cells = _cells(offsets, frame, bin_rad)
+        keys = _keys(cells)
+        order = np.lexsort((ranges, keys))
+        first = np.r_[True, keys[order][1:] != keys[order][:-1]]
+        return cls(camera_m, points, frame, bin_rad, keys[order][first], order[first])
+
+    def nearer_than(self, queries: np.ndarray, margin_m: float) -> np.ndarray:
+        """(Q,) index of the nearest scan point seen in the direction of each query (its bin and the
+        8 around it) when it is at least `margin_m` nearer to the camera than the query, else -1."""
+        offsets = queries - self.camera_m
+        ranges = np.linalg.norm(offsets, axis=1)
+        cells = _cells(offsets, self.frame, self.bin_rad)
+        best = np.full(len(queries), -1)
+        best_range = np.full(len(queries), np.inf)
+        for du in (-1, 0, 1):
+            for dv in (-1, 0, 1):
+                keys = _keys(cells + [du, dv])
+                slot = np.clip(np.searchsorted(self.keys, keys), 0, len(self.keys) - 1)
+                hit = self.keys[slot] == keys
+                index = np.where(hit, self.nearest[slot], -1)
+                found = np.where(hit, np.linalg.norm(self.points[index] - self.camera_m, axis=1), np.inf)
+                better = found < best_range
+                best, best_range = np.where(better, index, best), np.where(better, found, best_range)
+        return np.where(best_range <= ranges - margin_m, best, -1)
+
+
+def _cells(offsets: np.ndarray, frame: np.ndarray, bin_rad: float) -> np.ndarray:
+    """(N, 2) integer direction bins of offsets from the camera (tangent-plane angles)."""
+    local = offsets @ frame.T
+    angles = local[:, :2] / np.maximum(local[:, 2:3], 1e-9)
+    return np.floor(np.arctan(angles) / bin_rad).astype(np.int64)
+
+
+def _keys(cells: np.ndarray) -> np.ndarray:
+    """One int64 per bin (both angles well within +-2^30 bins)."""
+    return cells[:, 0] * (1 << 32) + (cells[:, 1] + (1 << 31))
+
+
+def occluded_rims(points: np.ndarray, shift: np.ndarray, view: ViewBuffer, *, radius_m: float, shift_ratio: float,
+                  past_m: tuple[float, ...], margin_m: float) -> np.ndarray:
+    """(N,) True for the rim points of a surface (`shift`, boundary.inward_shift over `radius_m`,
+    longer than shift_ratio * radius_m) past whose end the camera sees something at least
+    `margin_m` nearer: a line of sight one of `past_m` beyond the rim (against the shift) meets
+    an occluder, e.g. the top of a wall whose face the camera saw too obliquely to measure."""
+    length = np.linalg.norm(shift, axis=1)
+    rim = np.flatnonzero(length > shift_ratio * radius_m)
+    outward = -shift[rim] / length[rim, None]
+    occluded = np.zeros(len(points), bool)
+    for past in past_m:
+        occluded[rim[view.nearer_than(points[rim] + past * outward, margin_m) >= 0]] = True
+    return occluded
