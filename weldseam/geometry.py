@@ -92,3 +92,16 @@ def bend_corner(end_a, out_a, start_b, out_b, reach_m: float, min_turn_deg: floa
     if not (0.0 <= s <= reach_m and 0.0 <= t <= reach_m):
         return None
     return (end_a + s * out_a + start_b + t * out_b) / 2
+
+
+def corner_before(end_a, out_a, point_b, min_turn_deg: float = 30.0) -> np.ndarray | None:
+    """Where a seam leaving end_a along out_a (unit) turns to reach point_b, a piece too short
+    to have a direction: the foot of point_b on the ray, end_a + ((point_b - end_a) . out_a)
+    out_a. A groove over a block edge turns there; a chord would cut the corner. None when the
+    gap turns from out_a by less than min_turn_deg (a smooth seam, bridged straight)."""
+    offset = point_b - end_a
+    reach = float(offset @ out_a)
+    distance = float(np.linalg.norm(offset))
+    if distance < 1e-9 or reach >= distance * np.cos(np.radians(min_turn_deg)) or reach <= 0.0:
+        return None
+    return end_a + reach * out_a

@@ -74,6 +74,16 @@ def test_a_bend_bridged_across_its_failed_sections_keeps_its_corner():
     assert np.allclose(seam.torch_axes[corner], np.array([-1.0, 0, -1.0]) / np.sqrt(2))  # bisects the faces
 
 
+def test_a_short_piece_past_a_bend_is_reached_through_the_corner_not_across_it():
+    # The top runs along +x to 8 mm before the block's edge at x = 0.1; all the side shows past
+    # the edge is a 4 mm piece 10 mm down, too short to have a direction of its own. The chord
+    # from the top's end to it would cut the corner by 6 mm.
+    top, stub = piece(line([0.0, 0, 0], [0.092, 0, 0])), piece(line([0.1, 0, -0.010], [0.1, 0, -0.014]))
+    (seam,) = join([top, stub])
+    assert np.linalg.norm(seam.positions_m - [0.1, 0, 0], axis=1).min() < 1e-9  # the edge's corner
+    assert np.all((np.abs(seam.positions_m[:, 2]) < 1e-9) | (np.abs(seam.positions_m[:, 0] - 0.1) < 1e-9))
+
+
 def test_pieces_meeting_at_a_gentle_turn_get_no_corner_point():
     angles = np.linspace(0, 2 * np.pi, 180, endpoint=False)
     ring = 0.05 * np.column_stack([np.cos(angles), np.sin(angles), np.zeros(180)])

@@ -14,7 +14,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from weldseam.config import JoinConfig
-from weldseam.geometry import bend_corner, polyline_length, unit
+from weldseam.geometry import bend_corner, corner_before, polyline_length, unit
 from weldseam.pipeline.ends import END_BASELINE_M, end_direction
 from weldseam.pipeline.trace import TracedSeam
 
@@ -132,8 +132,7 @@ def _joined(
             flags_a = first.point_flags[::-1] if first_reversed else first.point_flags
             flags_b = second.point_flags[::-1] if second_reversed else second.point_flags
             weight = len(a) / (len(a) + len(b))
-            long_enough = min(polyline_length(a), polyline_length(b)) >= END_BASELINE_M
-            corner = bend_corner(a[-1], out_a, b[0], out_b, join_m) if long_enough else None
+            corner = _corner(a, out_a, b, out_b, join_m)
             bend_points = np.empty((0, 3)) if corner is None else corner[None]
             bend_axes = np.empty((0, 3)) if corner is None else unit(axes_a[-1] + axes_b[0])[None]
             best = (distance, TracedSeam(
@@ -146,6 +145,20 @@ def _joined(
                 flags=np.concatenate([flags_a, np.zeros(len(bend_points), np.uint8), flags_b]),
             ))
     return best
+
+
+def _corner(a: np.ndarray, out_a: np.ndarray, b: np.ndarray, out_b: np.ndarray, join_m: float):
+    """The bend between piece a's end and piece b's start, or None for a straight bridge: where
+    both carried straight on meet, or, when one is too short to have a direction, where the
+    other turns to reach it."""
+    a_long, b_long = polyline_length(a) >= END_BASELINE_M, polyline_length(b) >= END_BASELINE_M
+    if a_long and b_long:
+        return bend_corner(a[-1], out_a, b[0], out_b, join_m)
+    if a_long:
+        return corner_before(a[-1], out_a, b[0])
+    if b_long:
+        return corner_before(b[0], out_b, a[-1])
+    return None
 
 
 def _junction(point: np.ndarray, others: list[TracedSeam], join_m: float) -> bool:
