@@ -1,6 +1,10 @@
 import numpy as np
 import pytest
 
+from types import SimpleNamespace
+
+from scipy.spatial import cKDTree
+
 from tests.conftest import fillet_cloud
 from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.support import find_support_plane, off_support
@@ -33,4 +37,48 @@ def test_only_a_corner_on_the_support_plane_is_dropped(joint, height_m, dropped)
     line = np.column_stack([np.linspace(0, 0.1, 20), np.zeros(20), np.full(20, height_m)])
     seam = TracedSeam(line, np.tile([0.0, 0.0, -1.0], (20, 1)), False, joint, 1.0)
     support = (np.zeros(3), np.array([0.0, 0.0, 1.0]))
-    assert (off_support([seam], support, tolerance_m=0.002) == []) == dropped
+    nothing_beside = surface_of(np.ones((1, 3)))
+    assert (off_support([seam], nothing_beside, support, tolerance_m=0.002) == []) == dropped
+
+
+TABLE = (np.zeros(3), np.array([0.0, 0.0, 1.0]))
+
+
+def surface_of(points):
+    return SimpleNamespace(points=points, tree=cKDTree(points))
+
+
+def grid(u_range, v_range, step=0.001):
+    u, v = (a.ravel() for a in np.meshgrid(np.arange(*u_range, step), np.arange(*v_range, step)))
+    return u, v
+
+
+def seam_along_x(z_m, axis):
+    line = np.column_stack([np.linspace(0.0, 0.1, 51), np.zeros(51), np.full(51, z_m)])
+    return TracedSeam(line, np.tile(axis / np.linalg.norm(axis), (51, 1)), False, JointKind.V_GROOVE, 1.0)
+
+
+def test_the_v_a_tilted_plate_forms_with_the_table_is_dropped():
+    # A plate leaning at 30 degrees with its edge on the table along x: the valley between them
+    # looks like a V groove, but one of its sides is the table.
+    x, y = grid((0.0, 0.1), (-0.03, 0.0))
+    table = np.column_stack([x, y, np.zeros(x.size)])
+    x, s = grid((0.0, 0.1), (0.0, 0.03))
+    plate = np.column_stack([x, s * np.cos(np.radians(30)), s * np.sin(np.radians(30))])
+    seam = seam_along_x(0.0, np.array([0.0, np.sin(np.radians(15)), -1.0]))
+    assert off_support([seam], surface_of(np.vstack([table, plate])), TABLE, tolerance_m=0.002) == []
+
+
+def test_a_groove_between_plates_lying_on_the_table_is_kept():
+    # Two 10 mm plates on the table with a 60 degree V between them (root 2 mm above the
+    # table): the table shows beyond the plates, but neither side of the groove is the table.
+    x, y = grid((0.0, 0.1), (-0.05, 0.05))
+    top = np.abs(y) >= 0.0046 + 0.001
+    plates = np.column_stack([x[top], y[top], np.full(top.sum(), 0.01)])
+    wall = np.abs(y) < 0.0056
+    walls = np.column_stack([x[wall], y[wall], 0.002 + np.abs(y[wall]) / np.tan(np.radians(30))])
+    xt, yt = grid((0.0, 0.1), (-0.1, -0.05))
+    table = np.column_stack([xt, yt, np.zeros(xt.size)])
+    seam = seam_along_x(0.002, np.array([0.0, 0.0, -1.0]))
+    surface = surface_of(np.vstack([plates, walls, table]))
+    assert len(off_support([seam], surface, TABLE, tolerance_m=0.002)) == 1

@@ -193,14 +193,14 @@ def _clusters(state: PlanState, c: PlanConfig, selected: np.ndarray):
 
 def _support(state: PlanState, c: PlanConfig) -> None:
     """The table under the part (the largest plane of unbent points that nothing lies beyond), and
-    the traced corners on it dropped: there a part rests on the table."""
+    the traced seams formed with it dropped: there a part rests on the table."""
     if not c.support.enabled:
         return
     state.support = support.find_support_plane(
         state.working, state.descriptor <= state.threshold, state.working_camera,
         tolerance_m=c.support.tolerance_m, below_fraction=c.support.below_fraction,
     )
-    kept = support.off_support(state.seams, state.support, c.support.tolerance_m)
+    kept = support.off_support(state.seams, state.surface, state.support, c.support.tolerance_m)
     _reject_lost(state, state.seams, kept, Rejection.ON_SUPPORT)
     state.seams = kept
 

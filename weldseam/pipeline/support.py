@@ -50,15 +50,52 @@ def find_support_plane(
     return (centre, normal) if beyond.mean() <= below_fraction else None
 
 
-def off_support(seams: list[TracedSeam], support, tolerance_m: float) -> list[TracedSeam]:
-    """The seams that are not fillets on the support plane (`support` = (point, normal) or
-    None): there a part stands on the table. A fillet lies on it when the median distance of its
-    points from the plane is at most `tolerance_m`."""
+def off_support(seams: list[TracedSeam], surface, support, tolerance_m: float) -> list[TracedSeam]:
+    """The seams not formed with the support plane (`support` = (point, normal) or None): what a
+    part forms with the table it rests on is not a joint, whatever its kind (a fillet where a part
+    stands on the table, a V where a tilted plate's edge meets it). A seam is formed with it when,
+    at most of its points (formed_with), the surface on one side of the seam is the table."""
     if support is None:
         return seams
-    centre, normal = support
     return [
-        seam
-        for seam in seams
-        if seam.joint != JointKind.FILLET or np.median(np.abs((seam.positions_m - centre) @ normal)) > tolerance_m
+        seam for seam in seams
+        if not (lies_on(seam, support, tolerance_m) or formed_with(seam, surface, support, tolerance_m))
     ]
+
+
+def lies_on(seam: TracedSeam, plane, tolerance_m: float) -> bool:
+    """Whether an inside corner's points lie on `plane` (their median distance at most
+    `tolerance_m`): where a part stands on the table, even where its side is hard to see."""
+    centre, normal = plane
+    return seam.joint == JointKind.FILLET and np.median(np.abs((seam.positions_m - centre) @ normal)) <= tolerance_m
+
+
+def formed_with(seam: TracedSeam, surface, plane, tolerance_m: float) -> bool:
+    """Whether at half or more of up to SIDE_SAMPLES points along the seam, SIDE_SHARE of the
+    fine surface's points on one side of it (SIDE_NEAR_M to SIDE_FAR_M across the seam, within
+    SIDE_SLAB_M along it) lie within tolerance_m / 2 of `plane` (point, unit normal)."""
+    centre, normal = plane
+    positions, axes = seam.positions_m, seam.torch_axes
+    travel = np.gradient(positions, axis=0) if len(positions) > 1 else np.zeros_like(positions)
+    picks = np.unique(np.linspace(0, len(positions) - 1, min(SIDE_SAMPLES, len(positions))).round().astype(int))
+    touching = 0
+    for k, members in zip(picks, surface.tree.query_ball_point(positions[picks], SIDE_FAR_M)):
+        t = travel[k] / (np.linalg.norm(travel[k]) or 1.0)
+        lateral = np.cross(t, axes[k])
+        offsets = surface.points.take(members, axis=0) - positions[k]
+        across, along = offsets @ lateral, offsets @ t
+        on_plane = np.abs((surface.points.take(members, axis=0) - centre) @ normal) <= tolerance_m / 2
+        for side in (-1.0, 1.0):
+            beside = (np.abs(along) <= SIDE_SLAB_M) & (side * across >= SIDE_NEAR_M)
+            if np.count_nonzero(beside) >= 10 and np.mean(on_plane[beside]) >= SIDE_SHARE:
+                touching += 1
+                break
+    return touching >= len(picks) / 2
+
+
+# Sampling the surface beside a seam (formed_with).
+SIDE_SAMPLES = 15
+SIDE_NEAR_M = 0.004
+SIDE_FAR_M = 0.016
+SIDE_SLAB_M = 0.002
+SIDE_SHARE = 0.6
