@@ -133,6 +133,9 @@ class JointsConfig:
     face_radius_m: float = _param(0.012, "how far beside the seam the faces that set the torch axis are fitted")
     groove_min_depth_m: float = _param(0.0015, "shallowest groove that counts")
     fillet_min_leg_m: float = _param(0.012, "shortest face of a fillet (shorter: a plate edge on a table)")
+    lap_torch_split_deg: float = _param(
+        45.0, "lap: torch angle from the bottom plate's surface (45: the bisector; welding practice ~60)"
+    )
 
 
 @dataclass(frozen=True)

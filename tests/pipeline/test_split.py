@@ -4,6 +4,7 @@ import numpy as np
 
 from tests.pipeline.test_join import line, piece
 from weldseam.config import SplitConfig
+from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.section import PointFlag
 from weldseam.pipeline.split import split_at_junctions, split_seams
 
@@ -29,3 +30,13 @@ def test_a_seam_mostly_interpolated_across_a_hole_is_not_a_seam():
     flags[3:15] = PointFlag.INTERPOLATED  # 23 mm of its 36 bridged a hole: 13 mm seen
     assert split_seams([replace(seam, flags=flags)], [], SplitConfig(), step_m=0.002) == []
     assert len(split_seams([seam], [], SplitConfig(), step_m=0.002)) == 1
+
+
+def test_a_seam_shorter_than_its_kinds_shortest_is_dropped():
+    """A lap's top plate edge runs the plate's length: a 40 mm step is a clamp's arm on a plate;
+    a 40 mm groove is a seam."""
+    short = line([0, 0, 0], [0.04, 0, 0])
+    kept = split_seams([piece(short, JointKind.LAP), piece(short + [0, 0.1, 0])], [], SplitConfig(), step_m=0.002)
+    assert [seam.joint for seam in kept] == [JointKind.V_GROOVE]
+    long_lap = split_seams([piece(line([0, 0, 0], [0.06, 0, 0]), JointKind.LAP)], [], SplitConfig(), step_m=0.002)
+    assert len(long_lap) == 1

@@ -32,6 +32,8 @@ def test_a_plane_with_much_beyond_it_is_not_a_support():
 
 @pytest.mark.parametrize("joint, height_m, dropped", [
     (JointKind.FILLET, 0.0005, True), (JointKind.FILLET, 0.01, False), (JointKind.V_GROOVE, 0.0005, False),
+    (JointKind.LAP, 0.0005, True),  # a plate lying on the table: the same step as a lap
+    (JointKind.LAP, 0.008, False),  # a lap on a bottom plate 8 mm thick
 ])
 def test_only_a_corner_on_the_support_plane_is_dropped(joint, height_m, dropped):
     line = np.column_stack([np.linspace(0, 0.1, 20), np.zeros(20), np.full(20, height_m)])

@@ -14,17 +14,20 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from weldseam.config import SplitConfig
+from weldseam.pipeline.joints import min_length_m
 from weldseam.pipeline.section import PointFlag
 from weldseam.pipeline.trace import Hole, TracedSeam
 
 
 def split_seams(seams: list[TracedSeam], holes: list[Hole], params: SplitConfig, step_m: float) -> list[TracedSeam]:
     """The seams without fragments, split at junctions, each seen over min_seam_length_m (what was
-    interpolated across holes does not count) and with the holes whose middle lies within `step_m`
+    interpolated across holes does not count), no shorter than its kind's shortest seam
+    (joints.min_length_m), and with the holes whose middle lies within `step_m`
     (the spacing of the points bridged across them) of one of its points."""
     seams = [seam for seam in seams if seam.length_m >= max(params.min_branch_m, params.min_seam_length_m)]
     seams = split_at_junctions(seams, tolerance_m=params.junction_m)
-    return [_with_holes(seam, holes, step_m) for seam in seams if seen_length(seam) >= params.min_seam_length_m]
+    return [_with_holes(seam, holes, step_m) for seam in seams
+            if seen_length(seam) >= params.min_seam_length_m and seam.length_m >= min_length_m(seam.joint)]
 
 
 def seen_length(seam: TracedSeam) -> float:

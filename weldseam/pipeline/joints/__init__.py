@@ -2,8 +2,9 @@
 a residual and the measured geometry, or no fit with the reason.
 
 A model is a module with `KIND` (a JointKind), `CENTRED` (whether its fit assumes the joint in the
-middle of the section window) and `fit(u, w, params) -> ProfileFit | NoFit` (u ascending), the fit
-with its outline. Adding a joint kind means adding one model module and its entry in MODELS.
+middle of the section window), `MIN_LENGTH_M` (the shortest seam of its kind, m; 0: as short as
+split.min_seam_length_m allows) and `fit(u, w, params) -> ProfileFit | NoFit` (u ascending), the
+fit with its outline. Adding a joint kind means adding one model module and its entry in MODELS.
 """
 
 from __future__ import annotations
@@ -13,13 +14,13 @@ from dataclasses import replace
 
 import numpy as np
 
-from weldseam.pipeline.joints import fillet, v_groove
+from weldseam.pipeline.joints import fillet, lap, v_groove
 from weldseam.config import JointsConfig
 from weldseam.pipeline.joints.base import JointGeometry, JointKind, NoFit, ProfileFit, outline_residual
 
-__all__ = ["MODELS", "recentred", "JointGeometry", "JointKind", "NoFit", "ProfileFit", "fit_profile"]
+__all__ = ["MODELS", "min_length_m", "recentred", "JointGeometry", "JointKind", "NoFit", "ProfileFit", "fit_profile"]
 
-MODELS = (v_groove, fillet)
+MODELS = (v_groove, fillet, lap)
 MIN_PROFILE_POINTS = 12
 
 
@@ -54,3 +55,8 @@ def recentred(kind: JointKind) -> bool:
     """Whether a fit of this kind assumes the joint in the middle of its window (its model's
     CENTRED), so a fit far off the window's centre is fitted again centred on it."""
     return next(model.CENTRED for model in MODELS if model.KIND == kind)
+
+
+def min_length_m(kind: JointKind) -> float:
+    """The shortest seam of this kind (its model's MIN_LENGTH_M, m)."""
+    return next(model.MIN_LENGTH_M for model in MODELS if model.KIND == kind)

@@ -17,6 +17,7 @@ class JointKind(str, Enum):
 
     V_GROOVE = "v_groove"
     FILLET = "fillet"
+    LAP = "lap"
 
 
 @dataclass(frozen=True)

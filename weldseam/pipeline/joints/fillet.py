@@ -18,6 +18,7 @@ from weldseam.pipeline.joints.robust import line, noise
 KIND = JointKind.FILLET
 # Where two fitted lines meet does not depend on where the window sits.
 CENTRED = False
+MIN_LENGTH_M = 0.0
 MIN_INCLUDED_DEG = 45.0
 MAX_INCLUDED_DEG = 135.0
 # A face is only as long as the stretch its points fill with gaps of at most this.
