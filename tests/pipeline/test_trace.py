@@ -1,7 +1,10 @@
 import numpy as np
 
+from weldseam.config import TraceConfig
 from weldseam.pipeline.joints import JointKind
-from weldseam.pipeline.trace import TracedSeam, inside_traced
+from weldseam.pipeline.order import Chain
+from weldseam.pipeline.section import SectionFit
+from weldseam.pipeline.trace import TracedSeam, inside_traced, trace_chain
 
 STEP_M = 0.002
 
@@ -31,3 +34,26 @@ def test_a_line_mostly_inside_a_traced_seam_is_inside_it():
     assert inside_traced(longer, [seam], beside_m=0.006)
     half_outside = np.column_stack([np.arange(0.05, 0.15, STEP_M), np.full(50, 0.005), np.zeros(50)])
     assert not inside_traced(half_outside, [seam], beside_m=0.006)
+
+
+class ModelsSurface:
+    """A stand-in FineSurface whose sections along y = 0 fit a V-groove at the section centre,
+    except every third, which another model (a lap 3 mm aside) explains better unless only the
+    V-groove is sought."""
+
+    def fit_many(self, centres, travel, axes, lateral, kinds=None):
+        fits = []
+        for centre in centres:
+            other = round(centre[0] / STEP_M) % 3 == 0 and (kinds is None or JointKind.LAP in kinds)
+            kind, point = (JointKind.LAP, centre + [0.0, 0.003, 0.0]) if other else (JointKind.V_GROOVE, centre)
+            fits.append(SectionFit(kind, point, np.array([0.0, 0.0, -1.0])))
+        return fits
+
+
+def test_sections_another_model_explains_better_are_fitted_again_as_the_chains_joint():
+    along = np.arange(0.0, 0.1, STEP_M)
+    chain = Chain(np.column_stack([along, np.zeros_like(along), np.zeros_like(along)]), False)
+    axes = np.tile([0.0, 0.0, -1.0], (len(along), 1))
+    (seam,) = trace_chain(chain, axes, {}, ModelsSurface(), TraceConfig())
+    assert seam.joint == JointKind.V_GROOVE
+    assert len(seam.positions_m) == len(along) and np.abs(seam.positions_m[:, 1]).max() < 1e-12

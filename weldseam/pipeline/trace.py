@@ -86,6 +86,11 @@ def trace_chain(
     confidence = count / len(fits)
     if confidence < params.min_valid_fraction:
         return []
+    # A section another model explains better is fitted again seeking the chain's joint only.
+    other = np.array([k for k, fit in enumerate(fits) if fit.kind is not None and fit.kind != joint], dtype=int)
+    for k, fit in zip(other, surface.fit_many(chain.points[other], travel[other], axes[other], lateral[other],
+                                              {joint})):
+        fits[k] = fit
     positions, axes = np.array([fit.point_m for fit in fits]), np.array([fit.torch_axis for fit in fits])
     valid = np.array([fit.kind == joint for fit in fits]) & consistent(positions, axes, params.max_offset_m,
                                                                         params.max_turn_deg)
