@@ -136,6 +136,8 @@ class JointsConfig:
     lap_torch_split_deg: float = _param(
         45.0, "lap: torch angle from the bottom plate's surface (45: the bisector; welding practice ~60)"
     )
+    gap_min_m: float = _param(0.0005, "narrowest opening of a square butt joint (I-groove) that counts")
+    gap_max_m: float = _param(0.004, "widest opening of a square butt joint (I-groove)")
 
 
 @dataclass(frozen=True)

@@ -7,7 +7,7 @@ from weldseam.config import JointsConfig
 from weldseam.pipeline.joints import JointGeometry, JointKind, NoFit, ProfileFit, fit_profile
 from weldseam.pipeline.joints.base import outline_residual
 
-FILLET, V_GROOVE = JointKind.FILLET, JointKind.V_GROOVE
+FILLET, SQUARE_BUTT, V_GROOVE = JointKind.FILLET, JointKind.SQUARE_BUTT, JointKind.V_GROOVE
 PARAMS = JointsConfig()
 
 
@@ -125,6 +125,64 @@ def test_a_hole_with_vertical_walls_is_not_a_groove(rng):
     assert isinstance(fit_profile(u[seen], w[seen], PARAMS), NoFit)
 
 
+
+
+def square_gap(u, w, centre, gap, floor=None):
+    """A square butt's profile: the points over the gap (|u - centre| < gap / 2) are not seen, or
+    (floor, m below the surface) are seen on the table under it."""
+    over = np.abs(u - centre) < gap / 2
+    if floor is None:
+        return u[~over], w[~over]
+    return u, np.where(over, w - floor, w)
+
+
+@pytest.mark.parametrize("gap_mm", [1.0, 2.0, 3.0])
+def test_square_butt_centre_is_the_middle_of_the_gap(rng, gap_mm):
+    for floor in (None, 0.006):  # a dropout along the gap, or the table seen through it
+        u, w = square_gap(*profile(lambda u: 0 * u, rng), 0.0007, gap_mm / 1000, floor)
+        fit = fit_profile(u, w, PARAMS)
+        assert fit.kind == SQUARE_BUTT and abs(fit.u - 0.0007) < 0.0003 and abs(fit.w) < 0.0003
+        assert abs(fit.geometry.opening_m - gap_mm / 1000) < 0.0006
+        assert abs(fit.axis_u) < 0.05 and fit.axis_w < -0.99
+
+
+def test_square_butt_torch_axis_is_perpendicular_to_tilted_plates(rng):
+    c, s = np.cos(np.radians(12)), np.sin(np.radians(12))
+    plate_u, plate_w = square_gap(*profile(lambda u: 0 * u, rng), 0.0, 0.0015)
+    u, w = c * plate_u - s * plate_w, s * plate_u + c * plate_w
+    fit = fit_profile(u, w, PARAMS)
+    assert fit.kind == SQUARE_BUTT and abs(np.degrees(np.arctan2(fit.axis_u, -fit.axis_w)) - 12) < 1.5
+    assert abs(c * fit.u + s * fit.w) < 0.0003  # the seam point back on the plates is the gap's centre
+
+
+def test_what_looks_like_a_gap_but_is_not_a_square_butt(rng):
+    plate = profile(lambda u: 0 * u, rng, pitch=0.0007)
+    assert isinstance(fit_profile(*plate, PARAMS, {SQUARE_BUTT}), NoFit)  # sampling leaves no opening
+    too_wide = square_gap(*plate, 0.0, 0.005)
+    assert isinstance(fit_profile(*too_wide, PARAMS, {SQUARE_BUTT}), NoFit)
+    u, w = profile(lambda u: np.where(u > 0, -0.003, 0.0), rng)  # a step with a strip unseen at its edge
+    assert isinstance(fit_profile(*square_gap(u, w, 0.0, 0.0015), PARAMS, {SQUARE_BUTT}), NoFit)
+    u, w = profile(lambda u: np.where(u > 0, 0.4 * u, 0.0), rng)  # a bend with a strip unseen
+    assert isinstance(fit_profile(*square_gap(u, w, 0.0, 0.0015), PARAMS, {SQUARE_BUTT}), NoFit)
+    u, w = profile(lambda u: np.where(u > 0, 0.0, np.nan), rng)  # a plate's edge: one side only
+    assert isinstance(fit_profile(*square_gap(u[w == w], w[w == w], 0.0, 0.0015), PARAMS, {SQUARE_BUTT}), NoFit)
+    u, w = square_gap(*plate, 0.0, 0.0015)
+    bead = np.abs(u) < 0.003  # something standing over the gap (a bead, a tack): no opening
+    assert isinstance(fit_profile(u, np.where(bead, w + 0.002, w), PARAMS, {SQUARE_BUTT}), NoFit)
+
+
+def test_a_square_gap_is_found_where_the_pitch_is_as_wide_as_the_gap_but_not_elsewhere():
+    """One pixel lattice leaves openings of one pitch (+ noise) between neighbours everywhere:
+    a gap must stand out of them."""
+    rng = np.random.default_rng(3)
+    found = missed = 0
+    for _ in range(40):
+        u = np.arange(-0.025, 0.025, 0.0008) + rng.normal(0, 0.00008, 63)
+        w = rng.normal(0, 0.0003, len(u))
+        missed += isinstance(fit_profile(u, w, PARAMS, {SQUARE_BUTT}), NoFit)
+        fit = fit_profile(*square_gap(u, w, 0.0, 0.0015), PARAMS, {SQUARE_BUTT})
+        found += isinstance(fit, ProfileFit) and abs(fit.u) < 0.0006
+    assert missed == 40 and found >= 36
 
 
 def test_a_models_outline_residual_is_the_median_distance_of_the_points_around_its_seam():

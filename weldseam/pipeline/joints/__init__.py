@@ -14,13 +14,13 @@ from dataclasses import replace
 
 import numpy as np
 
-from weldseam.pipeline.joints import fillet, lap, v_groove
+from weldseam.pipeline.joints import fillet, lap, square_butt, v_groove
 from weldseam.config import JointsConfig
 from weldseam.pipeline.joints.base import JointGeometry, JointKind, NoFit, ProfileFit, outline_residual
 
 __all__ = ["MODELS", "min_length_m", "recentred", "JointGeometry", "JointKind", "NoFit", "ProfileFit", "fit_profile"]
 
-MODELS = (v_groove, fillet, lap)
+MODELS = (v_groove, fillet, lap, square_butt)
 MIN_PROFILE_POINTS = 12
 
 

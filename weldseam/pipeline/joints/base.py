@@ -18,6 +18,7 @@ class JointKind(str, Enum):
     V_GROOVE = "v_groove"
     FILLET = "fillet"
     LAP = "lap"
+    SQUARE_BUTT = "square_butt"
 
 
 @dataclass(frozen=True)

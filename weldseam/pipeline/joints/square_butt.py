@@ -1,0 +1,104 @@
+"""The square butt model (I-groove): two coplanar plate surfaces with a narrow opening between
+them, and no bevel.
+
+A reference line through the plate surface on both sides (v_groove.surface_line), and an opening
+in it within REACH_M of the window's centre: two neighbouring surface points u_left < u_right with
+joints.gap_min_m <= u_right - u_left <= joints.gap_max_m. What lies between them is nothing (a
+dropout along the gap) or lies deeper than the surface (the table or the far side seen through the
+gap, its walls), never above it. It is the widest opening between neighbouring surface points
+within `face_radius_m` (a wider one beside it is the joint: a groove's opening, with a wall's
+points just inside it), and an empty one at least UNIQUE_RATIO x as wide as any other there: one
+pixel lattice leaves openings of one pitch everywhere on a plate (on our own scenes, 1.3-3 mm gaps
+seen from 0.4-0.7 m, 1.2 keeps ~60 % of the sections on the gap and ~2.5 % of random sections on
+plain surfaces; the trace needs most sections of a chain to agree). The two sides each hold a
+plate surface, and lines fitted to them agree (one plane: a step or a bend is no gap).
+
+The seam point is the opening's centre on the reference line, u = (u_left + u_right) / 2; the
+torch axis is perpendicular to the reference line fitted within `face_radius_m` beside the
+opening. The opening measured is u_right - u_left less one surface spacing (each rim lies on
+average half a spacing inside its edge).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from weldseam.config import JointsConfig
+from weldseam.pipeline.joints.base import JointGeometry, JointKind, NoFit, ProfileFit
+from weldseam.pipeline.joints.robust import line, median, upper_decile
+from weldseam.pipeline.joints.v_groove import surface_line
+
+KIND = JointKind.SQUARE_BUTT
+# The surface line is fitted to the outer halves of the window: the opening must sit in its middle.
+CENTRED = True
+MIN_LENGTH_M = 0.0
+UNIQUE_RATIO = 1.2
+# Openings are sought this close to the window's centre: sections are centred on the joint, and
+# across a whole window a plate's sampling offers a unique opening in one section of three.
+REACH_M = 0.0015
+# Each side of the opening holds at least this many surface points within face_radius_m, spread
+# over at least SIDE_EXTENT of face_radius_m: a plate, not a few points at an edge.
+MIN_SIDE_POINTS = 6
+SIDE_EXTENT = 0.5
+# The lines fitted to the two sides meet the opening's centre within this of each other, at
+# slopes within COPLANAR_RAD: the two plates of a butt joint lie in one plane (a step or a bend
+# between two faces is no gap).
+COPLANAR_M = 0.001
+COPLANAR_RAD = np.radians(8.0)
+
+
+def fit(u: np.ndarray, w: np.ndarray, params: JointsConfig) -> ProfileFit | NoFit:
+    """The square butt joint in a profile (u ascending), or why there is none."""
+    surface = surface_line(u, w, params.groove_min_depth_m)
+    if isinstance(surface, NoFit):
+        return surface
+    intercept, slope, on_surface, residual, depth_limit, sigma = surface
+    found = _opening(u, residual, on_surface, params)
+    if isinstance(found, NoFit):
+        return found
+    u_left, u_right = found
+    face = params.face_radius_m
+    beside = on_surface & (((u >= u_left - face) & (u <= u_left)) | ((u >= u_right) & (u <= u_right + face)))
+    centre_u = (u_left + u_right) / 2
+    sides = []
+    for side in (beside & (u <= u_left), beside & (u >= u_right)):
+        if np.count_nonzero(side) < MIN_SIDE_POINTS or np.ptp(u[side]) < SIDE_EXTENT * face:
+            return NoFit("no plate surface on both sides of the opening")
+        sides.append(line(u[side], w[side]))
+    (left_w, left_slope), (right_w, right_slope) = ((a + b * centre_u, b) for a, b in sides)
+    if abs(left_w - right_w) > COPLANAR_M or abs(np.arctan(left_slope) - np.arctan(right_slope)) > COPLANAR_RAD:
+        return NoFit("the surfaces beside the opening are not one plane")
+    intercept, slope = line(u[beside], w[beside])
+    inside = (u > u_left) & (u < u_right)
+    depth = (intercept + slope * u[inside]) - w[inside]
+    deepest = upper_decile(depth) if len(depth) else None
+    norm = np.hypot(1.0, slope)
+    spacing = median(np.diff(u[beside]))
+    geometry = JointGeometry(opening_m=float(max(u_right - u_left - spacing, 0.0)), depth_m=deepest)
+    # The surface beside the opening, its walls straight down to what was seen deepest in it.
+    drop = deepest or 0.0
+    outline_u = np.array([u_left - 1.0, u_left, u_left, u_right, u_right, u_right + 1.0])
+    outline_w = intercept + slope * outline_u - np.array([0.0, 0.0, drop, drop, 0.0, 0.0])
+    return ProfileFit(KIND, float(centre_u), float(intercept + slope * centre_u), slope / norm, -1.0 / norm, sigma,
+                      geometry, tuple(zip(outline_u.tolist(), outline_w.tolist())))  # fmt: skip
+
+
+def _opening(u, residual, on_surface, params: JointsConfig):
+    """(u_left, u_right) of the opening nearest the window's centre (see the module), or NoFit."""
+    rims = np.flatnonzero(on_surface)
+    if len(rims) < 2 * MIN_SIDE_POINTS:
+        return NoFit("too few surface points")
+    spacing = np.diff(u[rims])
+    middle = (u[rims[1:]] + u[rims[:-1]]) / 2
+    wide = np.flatnonzero((spacing >= params.gap_min_m) & (spacing <= params.gap_max_m) & (np.abs(middle) <= REACH_M))
+    above = np.cumsum(residual > 0)  # points above the surface up to each index
+    for k in sorted(wide, key=lambda k: abs(middle[k])):
+        left, right = rims[k], rims[k + 1]
+        if above[right - 1] != above[left]:
+            continue
+        others = np.abs(middle - middle[k]) <= params.face_radius_m
+        others[k] = False
+        ratio = 1.0 if right - left > 1 else UNIQUE_RATIO
+        if spacing[k] >= ratio * spacing[others].max(initial=0.0):
+            return float(u[left]), float(u[right])
+    return NoFit("no opening of joints.gap_min_m..gap_max_m in the surface")
