@@ -60,6 +60,19 @@ class Scan:
 
 
 @dataclass(frozen=True)
+class Tack:
+    """A tack weld on a seam (part of it: the path runs across it): its middle on the seam line
+    (m, the path's frame) and its length along the seam (m)."""
+
+    middle_m: tuple[float, float, float]
+    length_m: float
+
+    def as_record(self) -> dict:
+        """The tack for the JSON output."""
+        return {"middle_m": list(self.middle_m), "length_m": self.length_m}
+
+
+@dataclass(frozen=True)
 class WeldPath:
     """One seam's ordered torch path.
 
@@ -67,11 +80,12 @@ class WeldPath:
     rotations: (K, 3, 3) tool frames; column 0 = x = y cross z, column 1 = y = travel
         direction, column 2 = z = torch axis pointing INTO the work.
     closed: the seam is a loop (the last pose joins the first).
-    joint: "v_groove" or "fillet".
+    joint: the joint kind: "v_groove", "fillet", "lap" or "square_butt".
     confidence: 0..1, how sure the detector is that this is a weld seam.
     pose_confidence: (K,) 0..1 per pose, how sure its position and axis are (1: its cross-section
         fitted the joint; less where a face was unseen, a dropout bridged, a hole interpolated, or
         the fit was rough); None: all 1.
+    tacks: the tack welds found on the seam, in travel order.
     """
 
     seam_id: int
@@ -81,6 +95,7 @@ class WeldPath:
     joint: str = "v_groove"
     confidence: float = 1.0
     pose_confidence: np.ndarray | None = None
+    tacks: tuple[Tack, ...] = ()
 
     @property
     def length_m(self) -> float:

@@ -16,7 +16,7 @@ from weldseam.errors import InputError
 from weldseam.io import atomic
 from weldseam.io.atomic import atomic_write
 from weldseam.io.paths import format_path_csv, format_path_json, read_paths, write_paths
-from weldseam.types import RunResult, WeldPath
+from weldseam.types import RunResult, Tack, WeldPath
 
 
 def make_result() -> RunResult:
@@ -31,7 +31,8 @@ def make_result() -> RunResult:
     down = Rotation.from_euler("xz", np.column_stack([np.full(16, np.pi), angles])).as_matrix()
     return RunResult(
         paths=(
-            WeldPath(0, line, turn, closed=False, joint="v_groove", confidence=0.9312345678912),
+            WeldPath(0, line, turn, closed=False, joint="v_groove", confidence=0.9312345678912,
+                     tacks=(Tack((0.4, 0.05, 0.05), 0.0083),)),
             WeldPath(1, ring, down, closed=True, joint="fillet", confidence=0.5),
         ),
         record={"input": {"scan": "scan.ply", "sha256": "ab" * 32},
@@ -61,7 +62,8 @@ def test_json_layout():
     assert document["timings_s"] == {"read": 0.012345679, "total": 1.5}
     assert document["warnings"] == ["seam 1 is short"]
     first, ring = document["seams"]
-    assert list(first) == ["id", "closed", "joint", "confidence", "length_m", "poses"]
+    assert list(first) == ["id", "closed", "joint", "confidence", "length_m", "tacks", "poses"]
+    assert first["tacks"] == [{"middle_m": [0.4, 0.05, 0.05], "length_m": 0.0083}] and ring["tacks"] == []
     assert (first["id"], first["closed"], first["joint"], first["confidence"]) == (
         0, False, "v_groove", 0.931234568)
     assert (ring["id"], ring["closed"], ring["joint"]) == (1, True, "fillet")

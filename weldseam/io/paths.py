@@ -39,7 +39,8 @@ def format_path_json(result: RunResult) -> bytes:
     Keys: format, version, frame (result.record["frame"]: "base", or "camera" for a scan
     that nothing placed), units ("m"), input and params (from result.record), timings_s,
     warnings, candidates (every seam candidate: centre, length, the seam it became or why it
-    was rejected), seams (id, closed, joint, confidence, length_m, poses of x y z qx qy qz qw
+    was rejected), seams (id, closed, joint, confidence, length_m, tacks (each tack weld's
+    middle_m and length_m), poses of x y z qx qy qz qw
     rx ry rz). Quaternions are hemisphere-continuous along each seam, rotation vectors have
     angle <= pi. Input and params are written exactly (each float as the shortest text that
     reads back to it), so that they place and plan a rerun bit for bit the same; the rest is
@@ -58,7 +59,8 @@ def format_path_json(result: RunResult) -> bytes:
             "candidates": result.record.get("candidates", []),
             "seams": [
                 {"id": path.seam_id, "closed": bool(path.closed), "joint": path.joint,
-                 "confidence": path.confidence, "length_m": path.length_m}
+                 "confidence": path.confidence, "length_m": path.length_m,
+                 "tacks": [tack.as_record() for tack in path.tacks]}
                 for path in result.paths
             ],
         }),

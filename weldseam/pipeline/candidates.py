@@ -15,6 +15,7 @@ class Rejection(str, Enum):
     """Why a candidate did not become (part of) a seam."""
 
     TOO_SHORT = "shorter than segment.min_seam_length_m"
+    SHORT_CHAIN = "too short to set its sections' direction (under grid.leaf_m)"
     NO_JOINT = "no joint model fits its sections"
     INSIDE_SEAM = "inside a seam traced before"
     TOO_FEW_FITS = "too few of its sections fit one joint (trace.min_valid_fraction)"

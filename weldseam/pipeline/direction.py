@@ -91,4 +91,6 @@ def _reordered(path: WeldPath, order: np.ndarray, reverse: bool) -> WeldPath:
     """The path's poses in `order`; `reverse`: travelling the other way (y and x turn over)."""
     rotations = path.rotations[order] * _REVERSED_FRAME if reverse else path.rotations[order]
     confidence = None if path.pose_confidence is None else path.pose_confidence[order]
-    return replace(path, positions_m=path.positions_m[order], rotations=rotations, pose_confidence=confidence)
+    tacks = path.tacks[::-1] if reverse else path.tacks
+    return replace(path, positions_m=path.positions_m[order], rotations=rotations, pose_confidence=confidence,
+                   tacks=tacks)

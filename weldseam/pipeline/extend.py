@@ -7,8 +7,9 @@ re-aimed by them:
 1. the next fit ahead (stepping over failed sections up to `max_skip_m`; a groove section in a
    dropout is bridged from the sections before: weldseam.pipeline.bridge);
 2. a turn over a 90-degree edge (a groove over a block's edge, a seam up a wall: turn.py);
-3. the part's end: where the scan sees past the part just ahead, the seam stops there;
-4. a hole in the scan over the whole seam, crossed and interpolated (holes.py).
+3. a tack weld over the seam just ahead, crossed on the seam line (tacks.py);
+4. the part's end: where the scan sees past the part just ahead, the seam stops there;
+5. a hole in the scan over the whole seam, crossed and interpolated (holes.py).
 
 When none finds the seam, the end stops. An extension stops where it comes within two steps of
 the seam itself (it has gone round a loop; the ends then meet and the seam closes). Run on joined
@@ -31,6 +32,7 @@ from weldseam.pipeline.parallel import map_shared
 from weldseam.pipeline.section import FineSurface, SectionFit, section_frames
 from weldseam.pipeline.holes import across_hole, hole_aim, hole_of
 from weldseam.pipeline.seek import Extension, next_fit
+from weldseam.pipeline.tacks import across_tack
 from weldseam.pipeline.turn import turned_run
 from weldseam.pipeline.trace import Hole, TracedSeam
 
@@ -241,6 +243,13 @@ def _turn_step(extension: Extension, end: SeamEnd) -> Step | None:
     return Step(fits, turned_to=travel, new_face_from=int(corner is not None))
 
 
+def _tack_step(extension: Extension, end: SeamEnd) -> Step | None:
+    """The seam carried across a tack weld standing over it just ahead (tacks.across_tack)."""
+    direction, bend = end.heading()
+    fits = across_tack(extension, end.positions[-1], end.axes[-1], direction, bend)
+    return None if fits is None else Step(fits)
+
+
 def _part_end_step(extension: Extension, end: SeamEnd) -> Step | None:
     """STOP where the scan sees past the part's end within part_end_reach_m ahead (bridge.
     part_ends_ahead): in a hole the camera sees nothing, past the part's end it sees what lies
@@ -264,7 +273,7 @@ def _hole_step(extension: Extension, end: SeamEnd) -> Step | None:
     return None if fits is None else Step(fits, hole=hole_of(end.positions[-1], fits))
 
 
-STRATEGIES = (_next_step, _turn_step, _part_end_step, _hole_step)
+STRATEGIES = (_next_step, _turn_step, _tack_step, _part_end_step, _hole_step)
 
 
 def _arc_since_fit(positions: list[np.ndarray], bridged: list[bool]) -> float:

@@ -20,9 +20,10 @@ from scipy.spatial import cKDTree
 from weldseam import __version__
 from weldseam.config import PlanConfig, config_to_dict
 from weldseam.errors import InputError, NoSeamError, StageError, WeldseamError
+from weldseam.geometry import polyline_length
 from weldseam.pipeline import boundary, candidates, condition, descriptor, extend, grid, join, normals, order
 from weldseam.pipeline import direction, occlusion, one_face, pairing, probe, resample, segment, smooth, split, support
-from weldseam.pipeline import thinning, trace
+from weldseam.pipeline import tacks, thinning, trace
 from weldseam.pipeline.candidates import Candidate, Rejection
 from weldseam.pipeline.neighbours import pairs_among, pairs_graph, radius_graph, radius_pairs
 from weldseam.pipeline.parallel import in_background, worker_process
@@ -280,7 +281,9 @@ def _trace(state: PlanState, c: PlanConfig) -> None:
     traced_so_far: list[trace.TracedSeam] = []
     rejected: dict[int, Rejection] = {}
     for k in by_length:
-        if not any(fit.kind is not None for fit in state.probes[k].values()):
+        if polyline_length(chains[k].points, chains[k].closed) < c.grid.leaf_m:
+            rejected[k] = Rejection.SHORT_CHAIN
+        elif not any(fit.kind is not None for fit in state.probes[k].values()):
             rejected[k] = Rejection.NO_JOINT
         elif trace.inside_traced(chains[k].points, traced_so_far, c.joints.face_radius_m / 2):
             rejected[k] = Rejection.INSIDE_SEAM
@@ -341,6 +344,13 @@ def _resample(state: PlanState, c: PlanConfig) -> None:
         state.dump("resample", np.vstack([p.positions_m for p in state.paths]), None)
 
 
+def _tacks(state: PlanState, c: PlanConfig) -> None:
+    """Each path's tack welds: where material stands over its seam line (tacks.py)."""
+    for k, path in enumerate(state.paths):
+        over = tacks.points_over(path.positions_m, path.rotations[:, :, 2], state.fine, state.surface.tree)
+        state.paths[k] = replace(path, tacks=tacks.tacks_of(path.positions_m, over))
+
+
 def _direction(state: PlanState, c: PlanConfig) -> None:
     """Each path turned to travel by the user's rule (direction.py)."""
     state.paths = list(direction.orient_paths(state.paths, c.direction))
@@ -371,6 +381,7 @@ STEPS = (
     Step("join", _join),  # extensions may meet
     Step("split", _split),
     Step("resample", _resample),
+    Step("tacks", _tacks),
     Step("direction", _direction),
 )
 STAGES = tuple(dict.fromkeys(step.name for step in STEPS))  # the timing keys, in order
