@@ -38,3 +38,13 @@ def upper_decile(values: np.ndarray) -> float:
 def noise(residuals: np.ndarray) -> float:
     """Robust standard deviation: 1.4826 x the median absolute deviation (+ 10 um floor)."""
     return 1.4826 * median(np.abs(residuals - median(residuals))) + 1e-5
+
+
+def one_plane(u: np.ndarray, w: np.ndarray, left: np.ndarray, right: np.ndarray, at_u: float, *,
+              offset_m: float, angle_rad: float) -> bool:
+    """Whether the plate surface left and right of a joint (the points of the masks `left` and
+    `right`, two or more each) is one plane: lines fitted to each side meet `at_u` within
+    `offset_m` of each other, at slopes within `angle_rad`."""
+    (a_left, b_left), (a_right, b_right) = line(u[left], w[left]), line(u[right], w[right])
+    apart = abs((a_left + b_left * at_u) - (a_right + b_right * at_u))
+    return apart <= offset_m and abs(np.arctan(b_left) - np.arctan(b_right)) <= angle_rad

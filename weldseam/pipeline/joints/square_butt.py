@@ -9,8 +9,9 @@ gap, its walls), never above it. It is the widest opening between neighbouring s
 within `face_radius_m` (a wider one beside it is the joint: a groove's opening, with a wall's
 points just inside it), and an empty one at least UNIQUE_RATIO x as wide as any other there: one
 pixel lattice leaves openings of one pitch everywhere on a plate (on our own scenes, 1.3-3 mm gaps
-seen from 0.4-0.7 m, 1.2 keeps ~60 % of the sections on the gap and ~2.5 % of random sections on
-plain surfaces; the trace needs most sections of a chain to agree). The two sides each hold a
+seen from 0.4-0.7 m, sections within 0.7 mm of the gap fit 70 % of the time, random sections on
+plain surfaces 3.4 %; the trace needs most sections of a chain to agree, and consistent seam
+points). The two sides each hold a
 plate surface, and lines fitted to them agree (one plane: a step or a bend is no gap).
 
 The seam point is the opening's centre on the reference line, u = (u_left + u_right) / 2; the
@@ -25,17 +26,18 @@ import numpy as np
 
 from weldseam.config import JointsConfig
 from weldseam.pipeline.joints.base import JointGeometry, JointKind, NoFit, ProfileFit
-from weldseam.pipeline.joints.robust import line, median, upper_decile
+from weldseam.pipeline.joints.robust import line, median, one_plane, upper_decile
 from weldseam.pipeline.joints.v_groove import surface_line
 
 KIND = JointKind.SQUARE_BUTT
 # The surface line is fitted to the outer halves of the window: the opening must sit in its middle.
 CENTRED = True
 MIN_LENGTH_M = 0.0
-UNIQUE_RATIO = 1.2
-# Openings are sought this close to the window's centre: sections are centred on the joint, and
-# across a whole window a plate's sampling offers a unique opening in one section of three.
-REACH_M = 0.0015
+UNIQUE_RATIO = 1.3
+# Openings are sought this close to the window's centre: sections are centred on the joint (an
+# extension's prediction drifts by a mm or two), and across a whole window a plate's sampling
+# offers a unique opening in one section of three.
+REACH_M = 0.003
 # Each side of the opening holds at least this many surface points within face_radius_m, spread
 # over at least SIDE_EXTENT of face_radius_m: a plate, not a few points at an edge.
 MIN_SIDE_POINTS = 6
@@ -60,13 +62,11 @@ def fit(u: np.ndarray, w: np.ndarray, params: JointsConfig) -> ProfileFit | NoFi
     face = params.face_radius_m
     beside = on_surface & (((u >= u_left - face) & (u <= u_left)) | ((u >= u_right) & (u <= u_right + face)))
     centre_u = (u_left + u_right) / 2
-    sides = []
-    for side in (beside & (u <= u_left), beside & (u >= u_right)):
+    left, right = beside & (u <= u_left), beside & (u >= u_right)
+    for side in (left, right):
         if np.count_nonzero(side) < MIN_SIDE_POINTS or np.ptp(u[side]) < SIDE_EXTENT * face:
             return NoFit("no plate surface on both sides of the opening")
-        sides.append(line(u[side], w[side]))
-    (left_w, left_slope), (right_w, right_slope) = ((a + b * centre_u, b) for a, b in sides)
-    if abs(left_w - right_w) > COPLANAR_M or abs(np.arctan(left_slope) - np.arctan(right_slope)) > COPLANAR_RAD:
+    if not one_plane(u, w, left, right, centre_u, offset_m=COPLANAR_M, angle_rad=COPLANAR_RAD):
         return NoFit("the surfaces beside the opening are not one plane")
     intercept, slope = line(u[beside], w[beside])
     inside = (u > u_left) & (u < u_right)
