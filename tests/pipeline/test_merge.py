@@ -11,7 +11,7 @@ from scipy.spatial.transform import Rotation
 
 from weldseam.config import MergeConfig
 from weldseam.geometry import transform_points
-from weldseam.pipeline import merge
+from weldseam.pipeline import register
 from weldseam.pipeline.merge import merge_frames, merge_warnings
 from weldseam.synthetic.multiview import box_groove_views, pipe_ring_views, pose_error, render_views
 from weldseam.synthetic.sensor import scan_points
@@ -186,7 +186,7 @@ def test_a_slide_no_shared_face_fixes_is_left_as_given_and_reported():
 
 def test_a_registration_that_does_not_settle_changes_no_frame_and_says_so(box, monkeypatch):
     _, _, poses, frames = box
-    monkeypatch.setattr(merge, "MAX_ITERATIONS", 2)
+    monkeypatch.setattr(register, "MAX_ITERATIONS", 2)
     merged = merge_frames(frames, np.array([p[:3, 3] for p in poses]), **PARAMS)
     assert not merged.converged and not merged.refined.any()
     assert np.array_equal(merged.corrections, np.tile(np.eye(4), (3, 1, 1)))

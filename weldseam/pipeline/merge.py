@@ -32,6 +32,8 @@ from scipy.spatial import cKDTree
 
 from weldseam.geometry import transform_points
 from weldseam.pipeline.neighbours import COVARIANCE_ENTRIES, extreme_eigenvectors, radius_pairs
+from weldseam.pipeline import register
+from weldseam.pipeline.register import Registration, Surface
 
 # A patch has at least this many occupied voxels of the 27 around it (fewer are stray points);
 # a surface patch, at least this many points in each on average (sparser: flying pixels).
@@ -39,17 +41,7 @@ MIN_PATCH_VOXELS = 6
 MIN_POINTS_PER_VOXEL = 2.0
 # A smooth patch's normal is within this of each neighbour patch's (a 30 mm radius turns 8 deg in 4 mm).
 MAX_PATCH_TURN_DEG = 15.0
-MAX_NORMAL_ANGLE_DEG = 20.0  # an ICP pair's two normals agree within this
 PATCHES_PER_DIRECTION = 400  # ICP patches per facing direction (_direction_cells) and patch size
-TUKEY_C = 4.685  # Tukey's biweight constant, in robust standard deviations (1.4826 MAD)
-MIN_SCALE_M = 0.0005  # the Tukey cut-off never drops below this (sensor noise scale)
-# A direction of the joint motion is refined only if the pairs hold at least this much
-# surface facing along it (summed over both members of every pair, so about half of it in
-# one frame), beyond what normals tilted by NORMAL_NOISE would give.
-MIN_FACING_AREA_M2 = 5e-5
-NORMAL_NOISE = np.sin(np.radians(10.0))
-CONVERGED_M = 3e-5  # an ICP step moving every paired point by less than this, at the finest reach, ends it
-MAX_ITERATIONS = 60
 FAR_SIDE_M = 0.015  # two frames seeing opposite faces of a wall thinner than this: one face is kept
 MAX_WALL_ANGLE_DEG = 60.0  # a wall's two faces are within this of facing opposite ways
 CONVEXITY_MARGIN_PER_M = 5.0  # curvatures closer than this (a 200 mm radius) are alike
@@ -97,27 +89,6 @@ class Patches(NamedTuple):
     neighbours: np.ndarray
 
 
-class Surface(NamedTuple):
-    """What ICP aligns in one frame (M samples): point (M, 3) on the patch plane, plane (M, 3)
-    a point of that plane, normal (M, 3) unit toward the camera, area_m2 (M,) the patch's
-    voxel face (its weight: a fine patch counts a quarter of a coarse one)."""
-
-    point: np.ndarray
-    plane: np.ndarray
-    normal: np.ndarray
-    area_m2: np.ndarray
-
-
-class Registration(NamedTuple):
-    """corrections (K, 4, 4), overlap (K,), refined (K,), converged, undetermined (K,): as in MergedFrames."""
-
-    corrections: np.ndarray
-    overlap: np.ndarray
-    refined: np.ndarray
-    converged: bool
-    undetermined: np.ndarray
-
-
 def merge_frames(
     frames: Sequence[np.ndarray], camera_origins_m: np.ndarray, *, dedup_voxel_m: float, icp_voxel_m: float,
     icp_max_distance_m: float, min_overlap: float, max_incidence_deg: float, refine: bool = True,
@@ -128,13 +99,13 @@ def merge_frames(
     Patches are `icp_voxel_m` voxels; a patch seen more edge-on than `max_incidence_deg`
     (angle between its normal and the ray to the camera) is a veil and its points are
     dropped. ICP pairs each frame's smooth patches with the nearest smooth patch of every
-    other frame (normals within MAX_NORMAL_ANGLE_DEG), at most `icp_max_distance_m` apart at
+    other frame (normals within register.MAX_NORMAL_ANGLE_DEG), at most `icp_max_distance_m` apart at
     first (the largest pose error it corrects), halving to 2 x `icp_voxel_m`. Each step
     minimises sum a_i w_i r_i^2 over the motions of all frames but the first at once:
     r_i = n_i . (p_i - q_i) the distance of a patch point to the paired patch's plane, a_i
     the patch's area, Tukey weights w_i = (1 - (r_i / c)^2)^2 with c = 4.685 x 1.4826
     median |r| (from 0.5 mm up to the reach). Only directions of the joint motion that the
-    pairs fix (MIN_FACING_AREA_M2) move. A frame whose share of paired patches is below
+    pairs fix (register.MIN_FACING_AREA_M2) move. A frame whose share of paired patches is below
     `min_overlap` keeps its pose (refined False) and takes no part. Non-finite points are
     dropped.
     """
@@ -152,7 +123,7 @@ def merge_frames(
     if refine and count > 1:
         surfaces = [_icp_surface(cloud, patch, origin, icp_voxel_m, max_incidence_deg)
                     for cloud, patch, origin in zip(clouds, patches, origins)]
-        registration = _register(surfaces, icp_max_distance_m, 2.0 * icp_voxel_m, min_overlap)
+        registration = register.register(surfaces, icp_max_distance_m, 2.0 * icp_voxel_m, min_overlap)
     else:
         registration = Registration(np.tile(np.eye(4), (count, 1, 1)), np.ones(count), np.zeros(count, dtype=bool),
                                     True, np.zeros(count, dtype=int))
@@ -175,8 +146,8 @@ def merge_warnings(merged: MergedFrames, sources: Sequence[str], *, min_overlap:
     if not refine or len(sources) < 2:
         return []
     if not merged.converged:
-        return [f"{sources[0]} and the other frames: the poses did not settle under ICP in {MAX_ITERATIONS} steps "
-                f"(moving less than {CONVERGED_M * 1000:.2f} mm): every frame's pose is used as given"]
+        return [f"{sources[0]} and the other frames: the poses did not settle under ICP in {register.MAX_ITERATIONS} steps "
+                f"(moving less than {register.CONVERGED_M * 1000:.2f} mm): every frame's pose is used as given"]
     warnings = []
     for name, overlap, refined, open_dof in zip(sources[1:], merged.overlap[1:], merged.refined[1:],
                                                 merged.undetermined[1:]):
@@ -308,154 +279,6 @@ def _balanced(normal: np.ndarray, per_direction: int) -> np.ndarray:
     rank = np.arange(len(order)) - np.repeat(start, size)
     stride = np.repeat(-(-size // per_direction), size)
     return np.sort(order[rank % stride == 0])
-
-
-class _Pairs(NamedTuple):
-    """Paired patches of one frame a (source) with another frame b (target), placed."""
-
-    source: int
-    target: int
-    index: np.ndarray
-    area_m2: np.ndarray
-    points: np.ndarray
-    residuals: np.ndarray
-    normals: np.ndarray
-
-
-def _register(surfaces: list[Surface], reach_m: float, fine_m: float, min_overlap: float) -> Registration:
-    """Joint point-to-plane ICP of all frames but the first (see merge_frames)."""
-    count = len(surfaces)
-    targets = [(s.point, s.plane, s.normal) for s in surfaces]
-    sources = [(s.point, s.normal, s.area_m2) for s in surfaces]
-    trees = [cKDTree(point, balanced_tree=False) for point, _, _ in targets]
-    identity = np.tile(np.eye(4), (count, 1, 1))
-    taking = np.ones(count, dtype=bool)
-    overlap = _overlap(_pair(sources, targets, trees, identity, taking, reach_m), sources)
-    overlap[0] = 1.0
-    taking = overlap >= min_overlap
-    free = np.flatnonzero(taking[1:]) + 1
-    if len(free) == 0:
-        return Registration(identity, overlap, taking & False, True, np.zeros(count, dtype=int))
-    corrections = identity.copy()
-    reach, converged = reach_m, False
-    undetermined = np.zeros(count, dtype=int)
-    for _ in range(MAX_ITERATIONS):
-        pairs = _pair(sources, targets, trees, corrections, taking, reach)
-        motions, lever_m, open_dof = _joint_step(pairs, free, reach)
-        if motions is None:
-            break
-        for k, motion in zip(free, motions):
-            corrections[k] = motion @ corrections[k]
-        step_m = max(np.linalg.norm(m[:3, :3] - np.eye(3), 2) * lever_m + np.linalg.norm(m[:3, 3]) for m in motions)
-        undetermined[free] = open_dof
-        if reach > fine_m:
-            if step_m < 0.1 * reach:
-                reach = max(fine_m, reach / 2)
-        elif step_m < CONVERGED_M:
-            converged = True
-            break
-    if not converged:
-        return Registration(identity, overlap, np.zeros(count, dtype=bool), False, np.zeros(count, dtype=int))
-    final = _overlap(_pair(sources, targets, trees, corrections, taking, reach), sources)
-    overlap[free] = final[free]
-    refined = np.zeros(count, dtype=bool)
-    refined[free] = True
-    return Registration(corrections, overlap, refined, True, undetermined)
-
-
-def _pair(sources, targets, trees, corrections, taking, reach_m) -> list[_Pairs]:
-    """Every ordered pair of distinct frames that take part: each source patch of one with
-    the nearest target patch of the other within `reach_m` whose normal agrees (both placed
-    by `corrections`)."""
-    min_cosine = np.cos(np.radians(MAX_NORMAL_ANGLE_DEG))
-    pairs = []
-    for a in np.flatnonzero(taking):
-        point = transform_points(corrections[a], sources[a][0])
-        normal = sources[a][1] @ corrections[a][:3, :3].T
-        for b in np.flatnonzero(taking):
-            if a == b:
-                continue
-            to_b = np.linalg.inv(corrections[b]) @ corrections[a]
-            distance, nearest = trees[b].query(transform_points(to_b, sources[a][0]), distance_upper_bound=reach_m,
-                                               workers=-1)
-            found = np.flatnonzero(np.isfinite(distance))
-            _, plane, target_normal = targets[b]
-            target_normal = target_normal[nearest[found]] @ corrections[b][:3, :3].T
-            agree = np.einsum("ij,ij->i", normal[found], target_normal) >= min_cosine
-            found, target_normal = found[agree], target_normal[agree]
-            residual = np.einsum("ij,ij->i", target_normal,
-                                 point[found] - transform_points(corrections[b], plane[nearest[found]]))
-            pairs.append(_Pairs(int(a), int(b), found, sources[a][2][found], point[found], residual, target_normal))
-    return pairs
-
-
-def _overlap(pairs: list[_Pairs], sources) -> np.ndarray:
-    """(K,) share of each frame's source patches paired with any other frame."""
-    paired = [np.zeros(len(point), dtype=bool) for point, _, _ in sources]
-    for p in pairs:
-        paired[p.source][p.index] = True
-    return np.array([found.mean() if len(found) else 0.0 for found in paired])
-
-
-def _joint_step(pairs: list[_Pairs], free: np.ndarray, reach_m: float):
-    """One Gauss-Newton step of all `free` frames' motions: (F,) (4, 4) motions, the lever
-    (m, the farthest paired point from the centre of rotation) and (F,) in how many of the
-    directions the pairs leave open each frame moves; None when nothing is paired."""
-    residual = np.concatenate([p.residuals for p in pairs]) if pairs else np.zeros(0)
-    if len(residual) < 6:
-        return None, 0.0, None
-    sigma = 1.4826 * np.median(np.abs(residual))
-    scale = min(reach_m, max(TUKEY_C * sigma, MIN_SCALE_M))
-    points = np.vstack([p.points for p in pairs])
-    centre = points.mean(axis=0)
-    lever = np.sqrt(((points - centre) ** 2).sum(axis=1).mean())  # rotations in units of metres at this lever
-    width = 6 * len(free)
-    column = {int(k): 6 * i for i, k in enumerate(free)}
-    hessian, gradient = np.zeros((width, width)), np.zeros(width)
-    rows = []
-    for p in pairs:
-        weight = p.area_m2 * np.clip(1.0 - (p.residuals / scale) ** 2, 0.0, None) ** 2
-        arm = (p.points - centre) / lever
-        jacobian = np.hstack([np.cross(arm, p.normals), p.normals])
-        # The pair's row of the joint Jacobian: +J in the source's columns, -J in the target's.
-        selector = np.zeros((6, width))
-        for u, sign in ((p.source, 1.0), (p.target, -1.0)):
-            if u in column:
-                selector[:, column[u]:column[u] + 6] += sign * np.eye(6)
-        weighted = jacobian * weight[:, None]
-        hessian += selector.T @ (weighted.T @ jacobian) @ selector
-        gradient -= selector.T @ (weighted.T @ p.residuals)
-        rows.append((arm, p.normals, weight, selector))
-    curvature, directions = np.linalg.eigh(hessian)
-    # The information along each direction: per pair, the square of its normal's component
-    # along the motion's velocity u there, less what a normal tilted by noise would give
-    # (NORMAL_NOISE^2 |u|^2): many nearly level patches of a table must not add up to
-    # fixing a horizontal slide, nor the patches around a pipe a turn about its axis.
-    information = np.zeros(width)
-    for arm, normals, weight, selector in rows:
-        motion = selector @ directions  # (6, D): each direction's rotation and translation for this pair
-        velocity = np.cross(motion[:3].T[None, :, :], arm[:, None, :]) + motion[3:].T[None, :, :]
-        along = np.einsum("ndk,nk->nd", velocity, normals)
-        information += weight @ np.maximum(along * along - NORMAL_NOISE**2 * (velocity * velocity).sum(axis=2), 0.0)
-    fixed = information >= MIN_FACING_AREA_M2
-    step = directions[:, fixed] @ ((directions[:, fixed].T @ gradient) / curvature[fixed])
-    # How many independent open directions move each frame: the rank of its block of the open
-    # subspace, counting singular values whose square (the share of a direction) is a fifth or more.
-    blocks = directions[:, ~fixed].reshape(len(free), 6, -1)
-    open_dof = [int((np.linalg.svd(block, compute_uv=False) ** 2 >= 0.2).sum()) for block in blocks]
-    motions = [_small_motion(part[:3] / lever, part[3:], centre) for part in step.reshape(len(free), 6)]
-    radius = np.sqrt(((points - centre) ** 2).sum(axis=1).max())
-    return motions, radius, np.array(open_dof)
-
-
-def _small_motion(rotation_vector: np.ndarray, translation: np.ndarray, centre: np.ndarray) -> np.ndarray:
-    """(4, 4) rotation R = exp([w]x) about `centre` followed by `translation`: p -> R (p - c) + c + t."""
-    from scipy.spatial.transform import Rotation
-
-    matrix = np.eye(4)
-    matrix[:3, :3] = Rotation.from_rotvec(rotation_vector).as_matrix()
-    matrix[:3, 3] = centre - matrix[:3, :3] @ centre + translation
-    return matrix
 
 
 def _near_sides(patches: list[Patches], corrections: np.ndarray, origins: np.ndarray) -> list[np.ndarray]:
