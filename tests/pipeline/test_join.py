@@ -1,3 +1,5 @@
+from dataclasses import replace
+
 import numpy as np
 
 from weldseam.pipeline.join import join_pieces, trim_overlaps
@@ -90,3 +92,14 @@ def test_pieces_meeting_at_a_gentle_turn_get_no_corner_point():
     (seam,) = join([piece(ring[5:60]), piece(ring[66:120])])
     assert len(seam.positions_m) == 55 + 54
     assert np.allclose(np.linalg.norm(seam.positions_m, axis=1), 0.05)
+
+
+def test_a_corner_traced_at_a_grooves_root_is_the_groove_not_a_seam_of_its_own():
+    # A 24 mm wide, 10 mm deep V along x (torch axis -z, into the work): its root, 10 mm under
+    # the opening, is a concave corner the fillet model also fits. A piece in line beyond the
+    # groove's end is no part of it.
+    groove = replace(piece(line([0, 0, 0], [0.1, 0, 0])), half_opening_m=0.012)
+    root = piece(line([0.04, 0, -0.010], [0.06, 0, -0.010]), JointKind.FILLET)
+    beyond = piece(line([0.115, 0, 0], [0.14, 0, 0]))
+    kept = trim_overlaps([groove, root, beyond], tolerance_m=0.004)
+    assert [len(seam.positions_m) for seam in kept] == [len(groove.positions_m), len(beyond.positions_m)]

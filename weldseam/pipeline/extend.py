@@ -18,7 +18,7 @@ seams only: extending every partial trace would walk the same seam once per piec
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -134,10 +134,11 @@ def _extended(seam: TracedSeam, start: list[Step], start_stop, end: list[Step], 
     before, after = _fits(start)[::-1], _fits(end)
     holes = [step.hole for steps, stop in ((start, start_stop), (end, end_stop)) for step in [*steps, stop]
              if step is not None and step.hole is not None]  # fmt: skip
-    return TracedSeam(
-        np.array([f.point_m for f in before] + list(seam.positions_m) + [f.point_m for f in after]),
-        np.array([f.torch_axis for f in before] + list(seam.torch_axes) + [f.torch_axis for f in after]),
-        False, seam.joint, seam.confidence, (*seam.holes, *holes), sources=seam.sources,
+    return replace(
+        seam,
+        positions_m=np.array([f.point_m for f in before] + list(seam.positions_m) + [f.point_m for f in after]),
+        torch_axes=np.array([f.torch_axis for f in before] + list(seam.torch_axes) + [f.torch_axis for f in after]),
+        closed=False, holes=(*seam.holes, *holes),
         flags=np.array([f.flags for f in before] + list(seam.point_flags) + [f.flags for f in after], np.uint8),
     )
 

@@ -30,7 +30,8 @@ def join_seams(seams: list[TracedSeam], params: JoinConfig) -> list[TracedSeam]:
 def trim_overlaps(seams: list[TracedSeam], *, tolerance_m: float) -> list[TracedSeam]:
     """Keep each stretch of seam once: several chains often trace the same seam, each a
     little further than the others. Longest first, every seam loses the points within
-    `tolerance_m` of a seam already kept; what remains (possibly several runs) is kept."""
+    `tolerance_m` of a seam already kept, or inside a kept groove (in_groove); what remains
+    (possibly several runs) is kept."""
     kept: list[TracedSeam] = []
     # One tree per kept seam, over its polyline rather than its points: a joined seam may
     # bridge a gap.
@@ -41,7 +42,10 @@ def trim_overlaps(seams: list[TracedSeam], *, tolerance_m: float) -> list[Traced
         kept_trees.append(cKDTree(_densified(piece.positions_m, piece.closed, tolerance_m / 2)))
 
     for seam in sorted(seams, key=lambda s: (-s.length_m, tuple(s.positions_m[0]))):
-        covered_by = [tree.query(seam.positions_m)[0] <= tolerance_m for tree in kept_trees]
+        covered_by = [
+            (tree.query(seam.positions_m)[0] <= tolerance_m) | in_groove(other, seam.positions_m, tolerance_m)
+            for tree, other in zip(kept_trees, kept)
+        ]
         covered = np.logical_or.reduce(covered_by) if covered_by else np.zeros(len(seam.positions_m), bool)
         if not covered.any():
             keep(seam)
@@ -54,6 +58,33 @@ def trim_overlaps(seams: list[TracedSeam], *, tolerance_m: float) -> list[Traced
             if len(run) >= 2:
                 keep(seam.part(run))
     return kept
+
+
+def in_groove(groove: TracedSeam, points: np.ndarray, tolerance_m: float) -> np.ndarray:
+    """(N,) whether each point lies in the groove's open volume: beside its nearest seam point q
+    (not beyond the groove's ends: within `tolerance_m` along it), at most the half-opening h
+    across, and deeper than `tolerance_m` but no more than 2 h below the opening along the torch
+    axis a (a 60-degree V is 1.7 h deep): depth = (p - q) . a. A corner traced at a groove's root,
+    or along a wall, is the groove seen by another model, no joint of its own; a branch meeting
+    the groove at a Y lies at its surface, and only the distance rule trims it."""
+    h = groove.half_opening_m
+    inside = np.zeros(len(points), bool)
+    if h <= tolerance_m or len(groove.positions_m) < 2:
+        return inside
+    distance, nearest = cKDTree(groove.positions_m).query(points, distance_upper_bound=2 * h + tolerance_m)
+    near = np.isfinite(distance)
+    if not near.any():
+        return inside
+    index = nearest[near]
+    travel = np.gradient(groove.positions_m, axis=0)[index]
+    travel /= np.maximum(np.linalg.norm(travel, axis=1, keepdims=True), 1e-12)
+    offset = points[near] - groove.positions_m[index]
+    axis = groove.torch_axes[index]
+    depth, along = np.sum(offset * axis, axis=1), np.sum(offset * travel, axis=1)
+    across = offset - depth[:, None] * axis - along[:, None] * travel
+    inside[near] = ((depth > tolerance_m) & (depth <= 2 * h) & (np.linalg.norm(across, axis=1) <= h)
+                    & (np.abs(along) <= tolerance_m))  # fmt: skip
+    return inside
 
 
 def _densified(points: np.ndarray, closed: bool, step_m: float) -> np.ndarray:
@@ -141,6 +172,7 @@ def _joined(
                 closed=False,
                 joint=first.joint,
                 confidence=round(weight * first.confidence + (1 - weight) * second.confidence, 3),
+                half_opening_m=weight * first.half_opening_m + (1 - weight) * second.half_opening_m,
                 sources=first.sources | second.sources,
                 flags=np.concatenate([flags_a, np.zeros(len(bend_points), np.uint8), flags_b]),
             ))

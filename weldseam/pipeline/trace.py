@@ -58,9 +58,9 @@ class TracedSeam:
 
     def part(self, index, closed: bool = False) -> TracedSeam:
         """The seam's points at `index` (a slice or index array) as a seam of their own (open unless
-        `closed`; the holes it crossed are not carried)."""
+        `closed`; the holes it crossed are not carried, the groove's opening is)."""
         return TracedSeam(self.positions_m[index], self.torch_axes[index], closed, self.joint, self.confidence,
-                          sources=self.sources, flags=self.point_flags[index])  # fmt: skip
+                          half_opening_m=self.half_opening_m, sources=self.sources, flags=self.point_flags[index])  # fmt: skip
 
     @property
     def length_m(self) -> float:
