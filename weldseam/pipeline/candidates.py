@@ -69,3 +69,14 @@ def commonest_reasons(candidates: list[Candidate], count: int = 3) -> str:
     tally = Counter(c.rejection for c in candidates if c.rejection is not None)
     ranked = sorted(tally.items(), key=lambda item: (-item[1], item[0].name))[:count]
     return ", ".join(f"{n} {rejection.value}" for rejection, n in ranked)
+
+
+def why_none(found: list[Candidate], segment) -> str:
+    """Why a run found no seam, for its one error line: the commonest rejections of the
+    candidates `found`, or, with none, that nothing bent enough (`segment`: SegmentConfig)."""
+    rejected = [c for c in found if c.rejection is not None]
+    if rejected:
+        return f"{len(rejected)} candidate(s) rejected: {commonest_reasons(rejected)}"
+    if segment.threshold is None:
+        return f"nothing in the scan bends like a crease of segment.min_crease_deg ({segment.min_crease_deg:g} deg)"
+    return f"nothing in the scan is above the descriptor threshold {segment.threshold:g}"

@@ -9,84 +9,51 @@ PlanState and adds its own results; a step that fails is reported with its name.
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
-from contextlib import ExitStack, contextmanager
-from dataclasses import dataclass, field, replace
+from contextlib import ExitStack
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.spatial import cKDTree
 
-from weldseam import __version__
-from weldseam.config import PlanConfig, config_to_dict
-from weldseam.errors import InputError, NoSeamError, StageError, WeldseamError
+from weldseam.config import PlanConfig
+from weldseam.errors import InputError, NoSeamError
 from weldseam.geometry import polyline_length
-from weldseam.pipeline import boundary, candidates, condition, descriptor, extend, grid, join, normals, order
-from weldseam.pipeline import direction, occlusion, one_face, pairing, probe, resample, segment, smooth, split, support
-from weldseam.pipeline import tacks, thinning, trace
-from weldseam.pipeline.candidates import Candidate, Rejection
-from weldseam.pipeline.neighbours import pairs_among, pairs_graph, radius_graph, radius_pairs
+from weldseam.pipeline import (
+    boundary,
+    candidates,
+    condition,
+    descriptor,
+    direction,
+    extend,
+    grid,
+    join,
+    normals,
+    occlusion,
+    one_face,
+    order,
+    pairing,
+    probe,
+    resample,
+    segment,
+    smooth,
+    split,
+    support,
+    tacks,
+    thinning,
+    trace,
+)
+from weldseam.pipeline.candidates import Rejection
+from weldseam.pipeline.neighbours import pairs_among, pairs_graph, radius_pairs
 from weldseam.pipeline.parallel import in_background, worker_process
 from weldseam.pipeline.section import FineSurface, PointFlag, pose_confidence, section_params
+from weldseam.pipeline.state import Dump, PlanState, chain_candidate, dump_seams, reject_lost, run_record, timed_step
 from weldseam.types import RunResult, Scan, WeldPath
 
 MIN_POINTS = 100
 # The fine tree answers the sections' 25 mm balls (~2000 points each): with big leaves and
 # uncompacted nodes it is built in 33 ms instead of 58 and answers 600 balls in 107 ms, not 125.
 FINE_TREE_LEAF_SIZE = 128
-
-Dump = Callable[[str, np.ndarray, np.ndarray | None], None]
-
-
-@dataclass
-class PlanState:
-    """What the steps have found so far (each step's fields are set by it; see STEPS)."""
-
-    scan: Scan
-    config: PlanConfig
-    resources: ExitStack
-    dump: Dump
-    warnings: list[str] = field(default_factory=list)
-    # condition
-    camera: np.ndarray | None = None
-    fine: np.ndarray | None = None
-    fine_tree: object = None
-    working: np.ndarray | None = None
-    working_camera: np.ndarray | None = None
-    graphs: dict = field(default_factory=dict)
-    # normals, descriptor, segment, support
-    normals: np.ndarray | None = None
-    descriptor: np.ndarray | None = None
-    valley: np.ndarray | None = None
-    threshold: float | None = None
-    valley_threshold: float | None = None
-    clusters: list = field(default_factory=list)
-    creases: list = field(default_factory=list)
-    view: occlusion.ViewBuffer | None = None
-    working_tree: object = None
-    support: tuple | None = None
-    # boundary, pairing, thinning, grid, order
-    rims: list = field(default_factory=list)
-    centre_points: list = field(default_factory=list)
-    chains: list = field(default_factory=list)
-    chain_cluster: list = field(default_factory=list)
-    # probe, trace, join, extend, split
-    surface: FineSurface | None = None
-    approx_axes: list = field(default_factory=list)
-    probes: list = field(default_factory=list)
-    seams: list = field(default_factory=list)
-    holes: list = field(default_factory=list)
-    short_candidates: list[Candidate] = field(default_factory=list)
-    chain_candidates: list[Candidate] = field(default_factory=list)
-    # resample
-    paths: list[WeldPath] = field(default_factory=list)
-
-    def neighbourhoods(self, radius_m: float):
-        """One radius graph of the working cloud per distinct radius: smoothing moves points by
-        well under a voxel, so the neighbourhoods found before it still hold after it."""
-        if radius_m not in self.graphs:
-            self.graphs[radius_m] = radius_graph(self.working, radius_m)
-        return self.graphs[radius_m]
 
 
 def _condition(state: PlanState, c: PlanConfig) -> None:
@@ -202,7 +169,7 @@ def _support(state: PlanState, c: PlanConfig) -> None:
         tolerance_m=c.support.tolerance_m, below_fraction=c.support.below_fraction,
     )
     kept = support.off_support(state.seams, state.surface, state.support, c.support.tolerance_m)
-    _reject_lost(state, state.seams, kept, Rejection.ON_SUPPORT)
+    reject_lost(state, state.seams, kept, Rejection.ON_SUPPORT)
     state.seams = kept
 
 
@@ -294,26 +261,26 @@ def _trace(state: PlanState, c: PlanConfig) -> None:
             if not found:
                 rejected[k] = Rejection.TOO_FEW_FITS
     state.seams = [seam for k in sorted(pieces) for seam in pieces[k]]
-    state.chain_candidates = [_chain_candidate(state, k, rejected.get(k)) for k in range(len(chains))]
-    _dump_seams(state, "trace")
+    state.chain_candidates = [chain_candidate(state, k, rejected.get(k)) for k in range(len(chains))]
+    dump_seams(state, "trace")
 
 
 def _join(state: PlanState, c: PlanConfig) -> None:
     state.seams = join.join_seams(state.seams, c.join)
-    _dump_seams(state, "join")
+    dump_seams(state, "join")
 
 
 def _extend(state: PlanState, c: PlanConfig) -> None:
     state.seams = extend.extend_seams(state.seams, state.surface, c.extend)
     state.holes = [hole for seam in state.seams for hole in seam.holes]
-    _dump_seams(state, "extend")
+    dump_seams(state, "extend")
 
 
 def _split(state: PlanState, c: PlanConfig) -> None:
     final = split.split_seams(state.seams, state.holes, c.split, c.extend.step_m)
-    _reject_lost(state, state.seams, final, Rejection.FRAGMENT)
+    reject_lost(state, state.seams, final, Rejection.FRAGMENT)
     state.seams = final
-    _dump_seams(state, "split")
+    dump_seams(state, "split")
 
 
 def _resample(state: PlanState, c: PlanConfig) -> None:
@@ -387,23 +354,6 @@ STEPS = (
 STAGES = tuple(dict.fromkeys(step.name for step in STEPS))  # the timing keys, in order
 
 
-@contextmanager
-def timed_step(name: str, timings: dict[str, float], on_stage: Callable[[str], None] | None):
-    """Run one stage: announce it, add its time to timings[name], and turn a numerical failure
-    inside it into a StageError that names it."""
-    if on_stage:
-        on_stage(name)
-    start = time.perf_counter()
-    try:
-        yield
-    except WeldseamError:
-        raise
-    except Exception as error:
-        raise StageError(name, f"{type(error).__name__}: {error}") from error
-    finally:
-        timings[name] = timings.get(name, 0.0) + time.perf_counter() - start
-
-
 def run_steps(
     scan: Scan,
     config: PlanConfig,
@@ -445,43 +395,10 @@ def plan_paths(
     state = run_steps(scan, config, dump=dump, on_stage=on_stage, timings=timings)
     found = [*state.short_candidates, *state.chain_candidates]
     if not state.paths and not allow_empty:
-        rejected = [c for c in found if c.rejection is not None]
-        if rejected:
-            why = f"{len(rejected)} candidate(s) rejected: {candidates.commonest_reasons(rejected)}"
-        elif config.segment.threshold is None:
-            why = f"nothing in the scan bends like a crease of segment.min_crease_deg ({config.segment.min_crease_deg:g} deg)"
-        else:
-            why = f"nothing in the scan is above the descriptor threshold {config.segment.threshold:g}"
-        raise NoSeamError(f"{scan.source or 'scan'}: no weld seam found ({why})", tuple(found))
-    record = {
-        "weldseam_version": __version__,
-        "input": {"path": scan.source, "sha256": scan.sha256, "points": int(len(scan.points_m))},
-        "camera_origin_m": normals.camera_record(state.camera),
-        "threshold": float(state.threshold),
-        "valley_threshold_m": None if state.valley_threshold is None else float(state.valley_threshold),
-        "params": config_to_dict(config),
-        "candidates": [c.as_record() for c in found],
-    }
+        raise NoSeamError(f"{scan.source or 'scan'}: no weld seam found ({candidates.why_none(found, config.segment)})",
+                          tuple(found))
+    record = run_record(state, found)
     return RunResult(paths=tuple(state.paths), record=record, timings_s=timings, warnings=tuple(state.warnings),
                      candidates=tuple(found), descriptor=(state.working, state.descriptor))  # fmt: skip
 
 
-def _chain_candidate(state: PlanState, k: int, rejection: Rejection | None) -> Candidate:
-    chain = state.chains[k]
-    found = candidates.candidate_of(chain.points, chain.closed)
-    if rejection is Rejection.NO_JOINT:  # what the middle probe found
-        probes = state.probes[k]
-        return replace(found, rejection=rejection, detail=probes[sorted(probes)[len(probes) // 2]].reason)
-    return replace(found, rejection=rejection)
-
-
-def _reject_lost(state: PlanState, before, after, rejection: Rejection) -> None:
-    """Mark the candidates that `before` traced and `after` no longer does as rejected so."""
-    lost = set().union(*(s.sources for s in before)) - set().union(*(s.sources for s in after))
-    for k in sorted(lost):
-        state.chain_candidates[k] = replace(state.chain_candidates[k], rejection=rejection)
-
-
-def _dump_seams(state: PlanState, name: str) -> None:
-    for seam in state.seams:
-        state.dump(name, seam.positions_m, None)

@@ -1,0 +1,128 @@
+"""What the steps share: the PlanState each adds its results to, the bookkeeping of what became
+of every candidate, and the timing of a step (run.py knows their order)."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from contextlib import ExitStack, contextmanager
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from weldseam import __version__
+from weldseam.config import PlanConfig, config_to_dict
+from weldseam.errors import StageError, WeldseamError
+from weldseam.pipeline import candidates, normals, occlusion
+from weldseam.pipeline.candidates import Candidate, Rejection
+from weldseam.pipeline.neighbours import radius_graph
+from weldseam.pipeline.section import FineSurface
+from weldseam.types import Scan, WeldPath
+
+Dump = Callable[[str, np.ndarray, np.ndarray | None], None]
+
+
+@dataclass
+class PlanState:
+    """What the steps have found so far (each step's fields are set by it; see STEPS)."""
+
+    scan: Scan
+    config: PlanConfig
+    resources: ExitStack
+    dump: Dump
+    warnings: list[str] = field(default_factory=list)
+    # condition
+    camera: np.ndarray | None = None
+    fine: np.ndarray | None = None
+    fine_tree: object = None
+    working: np.ndarray | None = None
+    working_camera: np.ndarray | None = None
+    graphs: dict = field(default_factory=dict)
+    # normals, descriptor, segment, support
+    normals: np.ndarray | None = None
+    descriptor: np.ndarray | None = None
+    valley: np.ndarray | None = None
+    threshold: float | None = None
+    valley_threshold: float | None = None
+    clusters: list = field(default_factory=list)
+    creases: list = field(default_factory=list)
+    view: occlusion.ViewBuffer | None = None
+    working_tree: object = None
+    support: tuple | None = None
+    # boundary, pairing, thinning, grid, order
+    rims: list = field(default_factory=list)
+    centre_points: list = field(default_factory=list)
+    chains: list = field(default_factory=list)
+    chain_cluster: list = field(default_factory=list)
+    # probe, trace, join, extend, split
+    surface: FineSurface | None = None
+    approx_axes: list = field(default_factory=list)
+    probes: list = field(default_factory=list)
+    seams: list = field(default_factory=list)
+    holes: list = field(default_factory=list)
+    short_candidates: list[Candidate] = field(default_factory=list)
+    chain_candidates: list[Candidate] = field(default_factory=list)
+    # resample
+    paths: list[WeldPath] = field(default_factory=list)
+
+    def neighbourhoods(self, radius_m: float):
+        """One radius graph of the working cloud per distinct radius: smoothing moves points by
+        well under a voxel, so the neighbourhoods found before it still hold after it."""
+        if radius_m not in self.graphs:
+            self.graphs[radius_m] = radius_graph(self.working, radius_m)
+        return self.graphs[radius_m]
+
+
+@contextmanager
+def timed_step(name: str, timings: dict[str, float], on_stage: Callable[[str], None] | None):
+    """Run one stage: announce it, add its time to timings[name], and turn a numerical failure
+    inside it into a StageError that names it."""
+    if on_stage:
+        on_stage(name)
+    start = time.perf_counter()
+    try:
+        yield
+    except WeldseamError:
+        raise
+    except Exception as error:
+        raise StageError(name, f"{type(error).__name__}: {error}") from error
+    finally:
+        timings[name] = timings.get(name, 0.0) + time.perf_counter() - start
+
+
+def chain_candidate(state: PlanState, k: int, rejection: Rejection | None) -> Candidate:
+    """The candidate chain k stands for, rejected for `rejection` (None: it became a seam)."""
+    chain = state.chains[k]
+    found = candidates.candidate_of(chain.points, chain.closed)
+    if rejection is Rejection.NO_JOINT:  # what the middle probe found
+        probes = state.probes[k]
+        return replace(found, rejection=rejection, detail=probes[sorted(probes)[len(probes) // 2]].reason)
+    return replace(found, rejection=rejection)
+
+
+def reject_lost(state: PlanState, before, after, rejection: Rejection) -> None:
+    """Mark the candidates that `before` traced and `after` no longer does as rejected so."""
+    lost = set().union(*(s.sources for s in before)) - set().union(*(s.sources for s in after))
+    for k in sorted(lost):
+        state.chain_candidates[k] = replace(state.chain_candidates[k], rejection=rejection)
+
+
+def dump_seams(state: PlanState, name: str) -> None:
+    """Every seam's points, written under the step's name by --dump-stages."""
+    for seam in state.seams:
+        state.dump(name, seam.positions_m, None)
+
+
+def run_record(state: PlanState, found: list[Candidate]) -> dict:
+    """The run's record: version, input, camera origin, thresholds, every parameter and what
+    became of every candidate (`found`)."""
+    scan = state.scan
+    return {
+        "weldseam_version": __version__,
+        "input": {"path": scan.source, "sha256": scan.sha256, "points": len(scan.points_m)},
+        "camera_origin_m": normals.camera_record(state.camera),
+        "threshold": float(state.threshold),
+        "valley_threshold_m": None if state.valley_threshold is None else float(state.valley_threshold),
+        "params": config_to_dict(state.config),
+        "candidates": [c.as_record() for c in found],
+    }
