@@ -71,7 +71,6 @@ def foreign_scenes(folder: Path):
 
 
 def measure(scenes, repeat: int) -> list[dict]:
-    from dataclasses import asdict
 
     from scipy.spatial import cKDTree
     from scipy.spatial.transform import Rotation
@@ -80,14 +79,14 @@ def measure(scenes, repeat: int) -> list[dict]:
     from weldseam.geometry import transform_points
     from weldseam.pipeline.merge import merge_frames
 
-    params = asdict(MergeConfig())
+    params = MergeConfig()
     results = []
     for name, frames, origins, poses, true_poses, seam, seen in scenes:
         print(f"merging {name}", file=sys.stderr)
         walls, cpus = [], []
         for _ in range(repeat):
             wall, cpu = time.perf_counter(), time.process_time()
-            merged = merge_frames(frames, origins, **params)
+            merged = merge_frames(frames, origins, params)
             walls.append(time.perf_counter() - wall)
             cpus.append(time.process_time() - cpu)
         line = cKDTree(seam)
@@ -105,7 +104,7 @@ def measure(scenes, repeat: int) -> list[dict]:
             })
         results.append({
             "scene": name, "frames": len(frames), "points": [len(f) for f in frames],
-            "merged_points": int(len(merged.points_m)), "wall_s": statistics.median(walls), "max_wall_s": max(walls),
+            "merged_points": len(merged.points_m), "wall_s": statistics.median(walls), "max_wall_s": max(walls),
             "cpu_s": statistics.median(cpus), "views": views, "meets": statistics.median(walls) <= TARGET_S,
         })
     return results

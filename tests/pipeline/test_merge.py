@@ -2,7 +2,7 @@
 far side of thin walls and per-point camera origins, on rendered frames of the box whose
 groove runs up, over and down and of a standing pipe with a ring groove (truth known)."""
 
-from dataclasses import asdict
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -16,7 +16,7 @@ from weldseam.pipeline.merge import merge_frames, merge_warnings
 from weldseam.synthetic.multiview import box_groove_views, pipe_ring_views, pose_error, render_views
 from weldseam.synthetic.sensor import scan_points
 
-PARAMS = {key: value for key, value in asdict(MergeConfig()).items() if key != "refine"}
+PARAMS = MergeConfig()
 # What the joint ICP leaves of a 2 mm / 1 deg pose error where the overlaps fix the pose.
 MAX_LEFT_MM, MAX_LEFT_DEG = 0.2, 0.1
 
@@ -40,7 +40,7 @@ def seam_error_mm(scene, scan, placement):
 
 def test_icp_recovers_an_injected_pose_error(box):
     scene, scans, poses, frames = box
-    merged = merge_frames(frames, np.array([p[:3, 3] for p in poses]), **PARAMS)
+    merged = merge_frames(frames, np.array([p[:3, 3] for p in poses]), PARAMS)
     assert merged.refined[1:].all() and np.array_equal(merged.corrections[0], np.eye(4))
     for k in (1, 2):
         # A truth point seen by frame k lands, in the merged cloud, at correction @ placed-by-the-wrong-pose.
@@ -52,7 +52,7 @@ def test_icp_recovers_an_injected_pose_error(box):
 
 def test_without_refinement_the_poses_are_kept(box):
     _, _, poses, frames = box
-    merged = merge_frames(frames, np.array([p[:3, 3] for p in poses]), refine=False, **PARAMS)
+    merged = merge_frames(frames, np.array([p[:3, 3] for p in poses]), replace(PARAMS, refine=False))
     assert not merged.refined.any() and np.array_equal(merged.corrections, np.tile(np.eye(4), (3, 1, 1)))
 
 
@@ -60,7 +60,7 @@ def test_overlap_holds_one_layer_and_every_point_keeps_its_camera(box):
     scene, scans, _, _ = box
     frames = [scan.points_m for scan in scans]
     origins = np.array([scan.camera_origin_m for scan in scans])
-    merged = merge_frames(frames, origins, refine=False, **PARAMS)
+    merged = merge_frames(frames, origins, replace(PARAMS, refine=False))
     np.testing.assert_array_equal(merged.camera_origins_m, origins[merged.frame])
     # The top face, seen by all three views: merged, it is about as dense as its densest view,
     # not the sum of the three.
@@ -80,8 +80,8 @@ def test_overlap_holds_one_layer_and_every_point_keeps_its_camera(box):
 
 def test_same_input_same_output(box):
     _, _, poses, frames = box
-    first = merge_frames(frames, np.array([p[:3, 3] for p in poses]), **PARAMS)
-    second = merge_frames(frames, np.array([p[:3, 3] for p in poses]), **PARAMS)
+    first = merge_frames(frames, np.array([p[:3, 3] for p in poses]), PARAMS)
+    second = merge_frames(frames, np.array([p[:3, 3] for p in poses]), PARAMS)
     assert first.points_m.tobytes() == second.points_m.tobytes()
     assert first.corrections.tobytes() == second.corrections.tobytes()
 
@@ -90,7 +90,7 @@ def test_a_frame_that_overlaps_nothing_keeps_its_pose():
     rng = np.random.default_rng(0)
     plane = np.column_stack([rng.uniform(0, 0.1, (20000, 2)), rng.normal(0, 0.0002, 20000)])
     far = plane + [1.0, 0.0, 0.0]
-    merged = merge_frames([plane, far], np.array([[0.05, 0.05, 0.4], [1.05, 0.05, 0.4]]), **PARAMS)
+    merged = merge_frames([plane, far], np.array([[0.05, 0.05, 0.4], [1.05, 0.05, 0.4]]), PARAMS)
     assert not merged.refined[1] and merged.overlap[1] == 0.0
     assert len(merged.points_m) == 40000
 
@@ -138,7 +138,7 @@ def test_known_pose_errors_are_taken_out_of_every_frame(seed):
     """2 mm / 1 deg on each of two frames of the box (whose cone fixes every direction):
     each comes back within 0.2 mm at the seam points it saw and 0.1 deg, all directions fixed."""
     scene, scans, poses, frames = with_pose_errors(box_groove_views, seed)
-    merged = merge_frames(frames, np.array([p[:3, 3] for p in poses]), **PARAMS)
+    merged = merge_frames(frames, np.array([p[:3, 3] for p in poses]), PARAMS)
     assert merged.converged and merged.refined[1:].all() and not merged.undetermined.any()
     for k in (1, 2):
         left = left_over(merged, scans, poses, k)
@@ -154,11 +154,11 @@ def test_a_pipe_is_placed_but_not_turned_about_its_axis():
     rng = np.random.default_rng(0)
     scene, cameras = pipe_ring_views(rng)
     scans = render_views(scene, cameras, rng)
-    exact = merge_frames([s.points_m for s in scans], np.array([s.camera_origin_m for s in scans]), **PARAMS)
+    exact = merge_frames([s.points_m for s in scans], np.array([s.camera_origin_m for s in scans]), PARAMS)
     turns = [np.degrees(Rotation.from_matrix(c[:3, :3]).magnitude()) for c in exact.corrections[1:]]
     assert max(turns) < 0.05 and (exact.undetermined[1:] == 1).all()
     scene, scans, poses, frames = with_pose_errors(pipe_ring_views, 1)
-    merged = merge_frames(frames, np.array([p[:3, 3] for p in poses]), **PARAMS)
+    merged = merge_frames(frames, np.array([p[:3, 3] for p in poses]), PARAMS)
     ring = cKDTree(scene.seams[0].points_m)
     for k in range(1, len(scans)):
         seen = scene.seams[0].points_m[scans[k].visible[0]]
@@ -177,7 +177,7 @@ def test_a_slide_no_shared_face_fixes_is_left_as_given_and_reported():
     rng = np.random.default_rng(1)
     scene, cameras = box_groove_views(rng, cone=False)
     scans = render_views(scene, cameras, rng)
-    merged = merge_frames([s.points_m for s in scans], np.array([s.camera_origin_m for s in scans]), **PARAMS)
+    merged = merge_frames([s.points_m for s in scans], np.array([s.camera_origin_m for s in scans]), PARAMS)
     seam = scene.seams[0].points_m
     for k in (1, 2):
         assert np.linalg.norm(transform_points(merged.corrections[k], seam) - seam, axis=1).max() < 0.0001
@@ -187,7 +187,7 @@ def test_a_slide_no_shared_face_fixes_is_left_as_given_and_reported():
 def test_a_registration_that_does_not_settle_changes_no_frame_and_says_so(box, monkeypatch):
     _, _, poses, frames = box
     monkeypatch.setattr(register, "MAX_ITERATIONS", 2)
-    merged = merge_frames(frames, np.array([p[:3, 3] for p in poses]), **PARAMS)
+    merged = merge_frames(frames, np.array([p[:3, 3] for p in poses]), PARAMS)
     assert not merged.converged and not merged.refined.any()
     assert np.array_equal(merged.corrections, np.tile(np.eye(4), (3, 1, 1)))
     assert merge_warnings(merged, ["a.png", "b.png", "c.png"], min_overlap=0.2, refine=True) == [
@@ -204,7 +204,7 @@ def test_the_inside_of_a_pipe_seen_through_its_top_is_dropped_where_its_outside_
     scene, cameras = pipe_ring_views(rng, wall_m=0.008, elevation_deg=50.0)
     scans = render_views(scene, cameras, rng)
     frames = [s.points_m for s in scans]
-    merged = merge_frames(frames, np.array([s.camera_origin_m for s in scans]), refine=False, **PARAMS)
+    merged = merge_frames(frames, np.array([s.camera_origin_m for s in scans]), replace(PARAMS, refine=False))
     ring = scene.seams[0].points_m
     centre, radius = ring.mean(axis=0), np.linalg.norm(ring[0, :2] - ring.mean(axis=0)[:2])
 
@@ -224,7 +224,7 @@ def test_a_frame_that_overlaps_too_little_keeps_its_pose_with_a_warning():
     rng = np.random.default_rng(0)
     plane = np.column_stack([rng.uniform(0, 0.1, (20000, 2)), rng.normal(0, 0.0002, 20000)])
     far = plane + [1.0, 0.0, 0.0]
-    merged = merge_frames([plane, far], np.array([[0.05, 0.05, 0.4], [1.05, 0.05, 0.4]]), **PARAMS)
+    merged = merge_frames([plane, far], np.array([[0.05, 0.05, 0.4], [1.05, 0.05, 0.4]]), PARAMS)
     assert merged.converged and not merged.refined[1] and merged.overlap[1] == 0.0
     assert np.array_equal(merged.corrections[1], np.eye(4))
     assert merge_warnings(merged, ["near.ply", "far.ply"], min_overlap=0.2, refine=True) == [

@@ -21,12 +21,8 @@ def merged_scan(frames: Sequence[Scan], config: PlanConfig, *, source: str) -> t
     frame with its (3,) camera origin (merge.merge_frames)."""
     if any(frame.camera_origin_m is None for frame in frames):
         raise InputError(f"{source}: every frame needs its pose to be merged with the others")
-    m = config.merge
-    merged = merge_frames(
-        [frame.points_m for frame in frames], np.array([frame.camera_origin_m for frame in frames]),
-        dedup_voxel_m=m.dedup_voxel_m, icp_voxel_m=m.icp_voxel_m, icp_max_distance_m=m.icp_max_distance_m,
-        min_overlap=m.min_overlap, max_incidence_deg=m.max_incidence_deg, refine=m.refine,
-    )
+    merged = merge_frames([frame.points_m for frame in frames], np.array([frame.camera_origin_m for frame in frames]),
+                          config.merge)
     digest = hashlib.sha256("".join(frame.sha256 for frame in frames).encode()).hexdigest()
     return Scan(points_m=merged.points_m, camera_origin_m=merged.camera_origins_m, source=source, sha256=digest), merged
 
@@ -57,7 +53,7 @@ def plan_frames(
     warnings = merge_warnings(merged, [frame.source for frame in frames], min_overlap=m.min_overlap, refine=m.refine)
     frames_record = [
         {
-            "path": frame.source, "sha256": frame.sha256, "points": int(len(frame.points_m)),
+            "path": frame.source, "sha256": frame.sha256, "points": len(frame.points_m),
             "kept_points": int((merged.frame == k).sum()),
             "icp_shift_mm": round(float(np.linalg.norm(transform_points(correction, centre) - centre)) * 1000, 6),
             "icp_rotation_deg": round(float(np.degrees(Rotation.from_matrix(correction[:3, :3]).magnitude())), 6),

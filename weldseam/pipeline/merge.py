@@ -30,9 +30,10 @@ from typing import NamedTuple
 import numpy as np
 from scipy.spatial import cKDTree
 
+from weldseam.config import MergeConfig
 from weldseam.geometry import transform_points
-from weldseam.pipeline.neighbours import COVARIANCE_ENTRIES, extreme_eigenvectors, radius_pairs
 from weldseam.pipeline import register
+from weldseam.pipeline.neighbours import COVARIANCE_ENTRIES, extreme_eigenvectors, radius_pairs
 from weldseam.pipeline.register import Registration, Surface
 
 # A patch has at least this many occupied voxels of the 27 around it (fewer are stray points);
@@ -89,14 +90,11 @@ class Patches(NamedTuple):
     neighbours: np.ndarray
 
 
-def merge_frames(
-    frames: Sequence[np.ndarray], camera_origins_m: np.ndarray, *, dedup_voxel_m: float, icp_voxel_m: float,
-    icp_max_distance_m: float, min_overlap: float, max_incidence_deg: float, refine: bool = True,
-) -> MergedFrames:
+def merge_frames(frames: Sequence[np.ndarray], camera_origins_m: np.ndarray, params: MergeConfig) -> MergedFrames:
     """Align (joint point-to-plane ICP) and merge base-frame frames (K of (N_k, 3), metres)
     seen from `camera_origins_m` (K, 3).
 
-    Patches are `icp_voxel_m` voxels; a patch seen more edge-on than `max_incidence_deg`
+    `params` (MergeConfig): patches are `icp_voxel_m` voxels; a patch seen more edge-on than `max_incidence_deg`
     (angle between its normal and the ray to the camera) is a veil and its points are
     dropped. ICP pairs each frame's smooth patches with the nearest smooth patch of every
     other frame (normals within register.MAX_NORMAL_ANGLE_DEG), at most `icp_max_distance_m` apart at
@@ -109,6 +107,7 @@ def merge_frames(
     `min_overlap` keeps its pose (refined False) and takes no part. Non-finite points are
     dropped.
     """
+    icp_voxel_m, max_incidence_deg = params.icp_voxel_m, params.max_incidence_deg
     origins = np.asarray(camera_origins_m, dtype=np.float64).reshape(-1, 3)
     clouds, patches = [], []
     for cloud, origin in zip(frames, origins):
@@ -120,10 +119,10 @@ def merge_frames(
         clouds.append(cloud[seen])
         patches.append(found._replace(group=found.group[seen]))
     count = len(clouds)
-    if refine and count > 1:
+    if params.refine and count > 1:
         surfaces = [_icp_surface(cloud, patch, origin, icp_voxel_m, max_incidence_deg)
                     for cloud, patch, origin in zip(clouds, patches, origins)]
-        registration = register.register(surfaces, icp_max_distance_m, 2.0 * icp_voxel_m, min_overlap)
+        registration = register.register(surfaces, params.icp_max_distance_m, 2.0 * icp_voxel_m, params.min_overlap)
     else:
         registration = Registration(np.tile(np.eye(4), (count, 1, 1)), np.ones(count), np.zeros(count, dtype=bool),
                                     True, np.zeros(count, dtype=int))
@@ -133,7 +132,7 @@ def merge_frames(
     near = _near_sides(patches, corrections, origins)
     placed = [cloud[near[k][patch.group]] for k, (cloud, patch) in enumerate(zip(placed, patches))]
     far_side = np.array([len(cloud) - int(n[p.group].sum()) for cloud, n, p in zip(clouds, near, patches)])
-    keep = _densest_frame_per_voxel(placed, dedup_voxel_m)
+    keep = _densest_frame_per_voxel(placed, params.dedup_voxel_m)
     frame = np.repeat(np.arange(count), [int(k.sum()) for k in keep])
     points = np.vstack([cloud[k] for cloud, k in zip(placed, keep)]) if placed else np.empty((0, 3))
     return MergedFrames(points, moved_origins[frame], frame, corrections, registration.overlap,
