@@ -38,7 +38,7 @@ def test_only_the_flanges_end_under_a_wall_is_an_occluded_rim():
     normals = orient_toward(pca_normals(points, graph), points, camera)
     shift = inward_shift(points, normals, graph)
     view = ViewBuffer.build(points, camera, 0.001)
-    rims = occluded_rims(points, shift, view, radius_m=0.006, shift_ratio=0.25, past_m=(0.003, 0.006, 0.01),
+    rims = occluded_rims(points, shift, view, min_shift_m=0.25 * 0.006, past_m=(0.003, 0.006, 0.01),
                          margin_m=0.012)
     on_flange = np.arange(len(points)) < len(flange)
     foot = on_flange & (points[:, 1] < 0.001) & (np.abs(points[:, 0]) < 0.03)  # the flange's last row

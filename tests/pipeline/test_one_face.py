@@ -23,7 +23,7 @@ def wall_top(height=0.05, lean_u=0.0):
 
 def test_a_flange_ending_under_a_wall_top_is_a_corner_with_the_bisector(rng):
     u, w = flange(rng)
-    fit = one_face_corner(u, w, *UP, wall_top(), PARAMS, 0.025)
+    fit = one_face_corner(u, w, UP, wall_top(), PARAMS, 0.025)
     assert fit.kind == JointKind.FILLET and fit.geometry.faces_seen == 1
     assert abs(fit.u - 0.004) < 0.0004 and abs(fit.w) < 0.0004
     expected = -np.array([-1.0, 1.0]) / np.sqrt(2)  # into the corner: between -u (flange) and +w (wall)
@@ -33,12 +33,12 @@ def test_a_flange_ending_under_a_wall_top_is_a_corner_with_the_bisector(rng):
 
 def test_a_plate_edge_with_nothing_nearer_past_it_is_not_a_corner(rng):
     u, w = flange(rng)
-    assert one_face_corner(u, w, *UP, lambda u, w: None, PARAMS, 0.025) is None
+    assert one_face_corner(u, w, UP, lambda u, w: None, PARAMS, 0.025) is None
 
 
 def test_a_low_step_past_the_end_is_not_a_wall(rng):
     u, w = flange(rng)
-    assert one_face_corner(u, w, *UP, wall_top(height=0.006), PARAMS, 0.025) is None  # under a fillet leg
+    assert one_face_corner(u, w, UP, wall_top(height=0.006), PARAMS, 0.025) is None  # under a fillet leg
 
 
 def test_the_far_side_of_a_wall_seen_from_behind_is_a_shadow_not_its_foot(rng):
@@ -46,16 +46,16 @@ def test_the_far_side_of_a_wall_seen_from_behind_is_a_shadow_not_its_foot(rng):
     shadow, and the line of sight past it meets the wall's top."""
     u, w = flange(rng)
     from_behind = (np.sin(np.radians(20)), np.cos(np.radians(20)))
-    assert one_face_corner(u, w, *from_behind, wall_top(), PARAMS, 0.025) is None
+    assert one_face_corner(u, w, from_behind, wall_top(), PARAMS, 0.025) is None
     from_the_flanges_side = (-np.sin(np.radians(10)), np.cos(np.radians(10)))  # the wall edge-on: seen
-    assert one_face_corner(u, w, *from_the_flanges_side, wall_top(), PARAMS, 0.025) is not None
+    assert one_face_corner(u, w, from_the_flanges_side, wall_top(), PARAMS, 0.025) is not None
 
 
 @pytest.mark.parametrize("lean_deg", [15.0, -15.0])
 def test_a_wall_far_from_square_is_not_taken_from_its_top_alone(rng, lean_deg):
     u, w = flange(rng)
     sight = wall_top(height=0.05, lean_u=0.05 * np.tan(np.radians(lean_deg)))
-    assert one_face_corner(u, w, *UP, sight, PARAMS, 0.025) is None
+    assert one_face_corner(u, w, UP, sight, PARAMS, 0.025) is None
 
 
 def test_mixed_pixels_past_the_end_and_a_hole_in_the_flange_do_not_move_the_corner(rng):
@@ -63,5 +63,5 @@ def test_mixed_pixels_past_the_end_and_a_hole_in_the_flange_do_not_move_the_corn
     hole = (u > -0.012) & (u < -0.008)  # a dropout in the flange: its edges are no ends
     u, w = u[~hole], w[~hole]
     mixed_u, mixed_w = np.array([0.0046, 0.0051]), np.array([0.004, 0.009])  # between the flange and the top
-    fit = one_face_corner(np.r_[u, mixed_u], np.r_[w, mixed_w], *UP, wall_top(), PARAMS, 0.025)
+    fit = one_face_corner(np.r_[u, mixed_u], np.r_[w, mixed_w], UP, wall_top(), PARAMS, 0.025)
     assert abs(fit.u - 0.004) < 0.0004

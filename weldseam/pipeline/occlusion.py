@@ -79,14 +79,14 @@ def _keys(cells: np.ndarray) -> np.ndarray:
     return cells[:, 0] * (1 << 32) + (cells[:, 1] + (1 << 31))
 
 
-def occluded_rims(points: np.ndarray, shift: np.ndarray, view: ViewBuffer, *, radius_m: float, shift_ratio: float,
+def occluded_rims(points: np.ndarray, shift: np.ndarray, view: ViewBuffer, *, min_shift_m: float,
                   past_m: tuple[float, ...], margin_m: float) -> np.ndarray:
-    """(N,) True for the rim points of a surface (`shift`, boundary.inward_shift over `radius_m`,
-    longer than shift_ratio * radius_m) past whose end the camera sees something at least
+    """(N,) True for the rim points of a surface (`shift`, boundary.inward_shift, longer than
+    `min_shift_m`) past whose end the camera sees something at least
     `margin_m` nearer: a line of sight one of `past_m` beyond the rim (against the shift) meets
     an occluder, e.g. the top of a wall whose face the camera saw too obliquely to measure."""
     length = np.linalg.norm(shift, axis=1)
-    rim = np.flatnonzero(length > shift_ratio * radius_m)
+    rim = np.flatnonzero(length > min_shift_m)
     outward = -shift[rim] / length[rim, None]
     occluded = np.zeros(len(points), bool)
     for past in past_m:

@@ -49,11 +49,11 @@ MIN_INCLUDED_DEG = 80.0
 MAX_INCLUDED_DEG = 100.0
 
 
-def one_face_corner(u, w, view_u: float, view_w: float, sight, params: JointsConfig, half_width_m: float):
+def one_face_corner(u, w, toward, sight, params: JointsConfig, half_width_m: float):
     """The corner of a profile (u ascending, m; the window |u| <= half_width_m) where a straight face
     ends at a gap in the points, or short of the window's edge, and the camera sees a wall's top
-    past it, or None (the end nearest the section's centre when several qualify). (view_u,
-    view_w): the unit direction toward the camera in the section plane. sight(u, w) -> (u, w) of
+    past it, or None (the end nearest the section's centre when several qualify). `toward`:
+    (u, w) of the unit direction toward the camera in the section plane. sight(u, w) -> (u, w) of
     the nearest scan point on the line of sight through the profile point (u, w) that is at least a
     fillet leg nearer to the camera, or None."""
     if len(u) < 12:
@@ -64,7 +64,7 @@ def one_face_corner(u, w, view_u: float, view_w: float, sight, params: JointsCon
         for side in (1, -1):  # the face's right end, its left end
             if not 0 <= k + side < len(faces) and half_width_m - abs(u[face[-1] if side > 0 else face[0]]) < GAP_M:
                 continue  # the face runs out of the window
-            corner = _corner(u[face], w[face], side, (view_u, view_w), sight, params)
+            corner = _corner(u[face], w[face], side, toward, sight, params)
             if corner is not None:
                 found.append(corner)
     return min(found, key=lambda fit: abs(fit.u)) if found else None

@@ -141,7 +141,7 @@ def _occluded_ends(state: PlanState, c: PlanConfig) -> np.ndarray:
     state.view = occlusion.ViewBuffer.build(state.fine, state.camera, c.condition.voxel_m)
     shift = boundary.inward_shift(state.working, state.normals, state.neighbourhoods(c.boundary.radius_m))
     return occlusion.occluded_rims(
-        state.working, shift, state.view, radius_m=c.boundary.radius_m, shift_ratio=c.boundary.shift_ratio,
+        state.working, shift, state.view, min_shift_m=c.boundary.shift_ratio * c.boundary.radius_m,
         past_m=one_face.PAST_END_M, margin_m=c.joints.fillet_min_leg_m,
     )
 

@@ -184,7 +184,7 @@ class FineSurface:
         toward = unit(self.view.camera_m - profile.centre)
         order = np.argsort(profile.u, kind="stable")
         return one_face_corner(
-            profile.u[order], profile.w[order], float(toward @ profile.lateral), float(-(toward @ profile.axis)),
+            profile.u[order], profile.w[order], (float(toward @ profile.lateral), float(-(toward @ profile.axis))),
             lambda u, w: self.sight(profile, u, w), self.params.joints, self.params.half_width_m,
         )
 

@@ -40,11 +40,12 @@ def noise(residuals: np.ndarray) -> float:
     return 1.4826 * median(np.abs(residuals - median(residuals))) + 1e-5
 
 
-def one_plane(u: np.ndarray, w: np.ndarray, left: np.ndarray, right: np.ndarray, at_u: float, *,
+def one_plane(u: np.ndarray, w: np.ndarray, sides: tuple[np.ndarray, np.ndarray], at_u: float, *,
               offset_m: float, angle_rad: float) -> bool:
-    """Whether the plate surface left and right of a joint (the points of the masks `left` and
-    `right`, two or more each) is one plane: lines fitted to each side meet `at_u` within
+    """Whether the plate surface left and right of a joint (`sides`: the masks of its points on
+    the left and on the right, two or more each) is one plane: lines fitted to each side meet `at_u` within
     `offset_m` of each other, at slopes within `angle_rad`."""
+    left, right = sides
     (a_left, b_left), (a_right, b_right) = line(u[left], w[left]), line(u[right], w[right])
     apart = abs((a_left + b_left * at_u) - (a_right + b_right * at_u))
     return apart <= offset_m and abs(np.arctan(b_left) - np.arctan(b_right)) <= angle_rad

@@ -66,7 +66,7 @@ def fit(u: np.ndarray, w: np.ndarray, params: JointsConfig) -> ProfileFit | NoFi
     for side in (left, right):
         if np.count_nonzero(side) < MIN_SIDE_POINTS or np.ptp(u[side]) < SIDE_EXTENT * face:
             return NoFit("no plate surface on both sides of the opening")
-    if not one_plane(u, w, left, right, centre_u, offset_m=COPLANAR_M, angle_rad=COPLANAR_RAD):
+    if not one_plane(u, w, (left, right), centre_u, offset_m=COPLANAR_M, angle_rad=COPLANAR_RAD):
         return NoFit("the surfaces beside the opening are not one plane")
     intercept, slope = line(u[beside], w[beside])
     inside = (u > u_left) & (u < u_right)
