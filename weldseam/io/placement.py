@@ -205,6 +205,13 @@ def _place(frame: _Frame, options, calibration, pose_options_given, origin, foun
     if not is_depth and T_base_camera is None and camera_origin is None and cloud_frame == "base" and (
             options.cloud_frame is None and found is None):
         hint = camera_frame_hint(scan)
+        if hint:
+            # A camera's own cloud is seen from its origin: normals oriented toward +z (a camera
+            # above) would face away from it, and every concave corner would read as convex.
+            scan = replace(scan, camera_origin_m=np.zeros(3))
+            placement = replace(placement, camera_origin_m=np.zeros(3))
+            sources["camera_origin_m"] = "the origin of a cloud that looks like a camera's own"
+            hint += "; its normals are oriented toward the origin, as a camera's own cloud is seen"
     warnings = [*pose_warnings, *notes, *([hint] if hint else [])]
     return scan, messages, warnings, placement_record(placement, robot, sources), hint
 
