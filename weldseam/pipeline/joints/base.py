@@ -19,6 +19,7 @@ class JointKind(str, Enum):
     FILLET = "fillet"
     LAP = "lap"
     SQUARE_BUTT = "square_butt"
+    BEVEL = "bevel"
 
 
 @dataclass(frozen=True)
