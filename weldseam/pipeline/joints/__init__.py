@@ -15,13 +15,13 @@ from dataclasses import replace
 
 import numpy as np
 
-from weldseam.pipeline.joints import bevel, fillet, lap, square_butt, v_groove
+from weldseam.pipeline.joints import bevel, fillet, lap, outside_corner, square_butt, v_groove
 from weldseam.config import JointsConfig
 from weldseam.pipeline.joints.base import JointGeometry, JointKind, NoFit, ProfileFit, outline_residual
 
 __all__ = ["MODELS", "min_length_m", "recentred", "JointGeometry", "JointKind", "NoFit", "ProfileFit", "fit_profile"]
 
-MODELS = (v_groove, fillet, lap, square_butt, bevel)
+MODELS = (v_groove, fillet, lap, square_butt, bevel, outside_corner)
 MIN_PROFILE_POINTS = 12
 # A special case's outline within this fraction of the general kind's residual explains the points
 # as well (noise decides between them): a single bevel whose bevel wall is seen is also a V-groove

@@ -20,6 +20,7 @@ class JointKind(str, Enum):
     LAP = "lap"
     SQUARE_BUTT = "square_butt"
     BEVEL = "bevel"
+    OUTSIDE_CORNER = "outside_corner"
 
 
 @dataclass(frozen=True)
