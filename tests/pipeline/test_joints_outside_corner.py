@@ -86,3 +86,20 @@ def test_a_ridge_with_a_shallow_scratch_is_no_outside_corner(rng):
     u, w, _, _ = corner_profile(rng, depth_m=0.0012)
     assert isinstance(outside_corner.fit(u, w, PARAMS), NoFit)
 
+
+def test_a_face_seen_short_of_its_edge_moves_the_seam_only_along_the_torch_axis(rng):
+    """The V is symmetric about the faces' bisector: where one face's last 0.8 mm before its edge
+    is lost (noise makes a wall's shallowest points pass for the face and the face's end for the
+    wall), the seam stays on the bisector and moves only along the axis (by about a third of the
+    loss; the midpoint of the edges would move half the loss across)."""
+    across, along = [], []
+    for _ in range(20):
+        u, w, seam, axis = corner_profile(rng, hidden_wall=1)
+        edge_u = 0.004 * np.tan(np.radians(30.0)) / (1.0 + np.tan(np.radians(30.0)))  # as corner_profile
+        keep = ~((u > edge_u) & (u < edge_u + 0.0008))
+        fit = fit_profile(u[keep], w[keep], PARAMS)
+        assert fit.kind == CORNER
+        offset = np.array([fit.u - seam[0], fit.w - seam[1]])
+        along.append(offset @ axis)
+        across.append(offset @ [axis[1], -axis[0]])
+    assert abs(np.mean(across)) < 0.0001 and abs(np.mean(along)) < 0.0005

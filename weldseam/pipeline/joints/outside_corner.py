@@ -7,8 +7,10 @@ farthest from the break), at an outer included angle of MIN_ROOF_DEG-MAX_ROOF_DE
 where they would meet. Each top edge of the V is where its face ends toward the ridge (the camera
 sees a surface up to its edge; the V's walls are often hidden). Between the edges lies the V: its
 points (if any are seen) at least `groove_min_depth_m` below the roof; a plain ridge, whose faces
-run into each other, is no outside corner. The seam point is the midpoint of the two top edges;
-the torch axis is minus the bisector of the two faces' outward normals.
+run into each other, is no outside corner. The torch axis is minus the bisector of the two faces'
+outward normals; the V is cut symmetrically about it, so the seam point (the midpoint of the two
+top edges) lies on the bisector through the faces' apex, as deep below the apex as the two top
+edges on average.
 """
 
 from __future__ import annotations
@@ -113,9 +115,14 @@ def fit(u: np.ndarray, w: np.ndarray, params: JointsConfig) -> ProfileFit | NoFi
         right_edge = _wall_edge(u, w, (a_right, b_right), right_edge, bottom[0], right_seen)
     left = np.array([left_edge, a_left + b_left * left_edge])
     right = np.array([right_edge, a_right + b_right * right_edge])
-    seam = (left + right) / 2
     normal_left, normal_right = np.array([-b_left, 1.0]), np.array([-b_right, 1.0])  # outward
     axis = -unit(unit(normal_left) + unit(normal_right))
+    # The V is cut symmetrically about the faces' bisector: the seam lies on it (the long faces
+    # place it well), as deep below the apex as the two edges on average. A wall's shallowest
+    # points pass for its face, so one edge may fall up to a millimetre inside; on the bisector
+    # that moves the seam only along the torch axis, by a third of it.
+    apex = np.array([apex_u, a_left + b_left * apex_u])
+    seam = apex + axis * float(((left - apex) @ axis + (right - apex) @ axis) / 2)
     geometry = JointGeometry(opening_m=float(np.linalg.norm(right - left)), depth_m=deepest,
                              included_deg=float(roof), legs_m=(left_reach, right_reach))
     outline = (left + to_left, left, seam if bottom is None else bottom, right, right + to_right)
