@@ -19,7 +19,7 @@ from weldseam.pipeline.joints import bevel, fillet, lap, outside_corner, square_
 from weldseam.config import JointsConfig
 from weldseam.pipeline.joints.base import JointGeometry, JointKind, NoFit, ProfileFit, outline_residual
 
-__all__ = ["MODELS", "min_length_m", "recentred", "JointGeometry", "JointKind", "NoFit", "ProfileFit", "fit_profile"]
+__all__ = ["MODELS", "min_length_m", "one_joint", "recentred", "JointGeometry", "JointKind", "NoFit", "ProfileFit", "fit_profile"]
 
 MODELS = (v_groove, fillet, lap, square_butt, bevel, outside_corner)
 MIN_PROFILE_POINTS = 12
@@ -64,6 +64,12 @@ def recentred(kind: JointKind) -> bool:
     """Whether a fit of this kind assumes the joint in the middle of its window (its model's
     CENTRED), so a fit far off the window's centre is fitted again centred on it."""
     return next(model.CENTRED for model in MODELS if model.KIND == kind)
+
+
+def one_joint(kind: JointKind, other: JointKind) -> bool:
+    """Whether seams of these kinds may be pieces of one joint: the same kind, or one a special
+    case of the other (a V-groove whose one wall looks square over a stretch is still one groove)."""
+    return kind == other or _specialises(kind, other) or _specialises(other, kind)
 
 
 def _specialises(kind: JointKind, general: JointKind) -> bool:
