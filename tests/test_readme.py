@@ -55,3 +55,12 @@ def test_readme_block_works(block, tmp_path):
         for server in servers:
             server.send_signal(signal.SIGINT)
             server.wait(timeout=30)
+
+
+def test_the_readme_and_the_weld_path_name_every_joint_kind():
+    from weldseam.pipeline.joints import JointKind
+    from weldseam.types import WeldPath
+
+    listed = re.search(r"joint \(([^)]*)\)", (ROOT / "README.md").read_text()).group(1)  # what JSON holds
+    for kind in JointKind:
+        assert f"`{kind.value}`" in listed and f'"{kind.value}"' in WeldPath.__doc__

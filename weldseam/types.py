@@ -80,7 +80,7 @@ class WeldPath:
     rotations: (K, 3, 3) tool frames; column 0 = x = y cross z, column 1 = y = travel
         direction, column 2 = z = torch axis pointing INTO the work.
     closed: the seam is a loop (the last pose joins the first).
-    joint: the joint kind: "v_groove", "fillet", "lap" or "square_butt".
+    joint: the joint kind: "v_groove", "fillet", "lap", "square_butt", "bevel" or "outside_corner".
     confidence: 0..1, how sure the detector is that this is a weld seam.
     pose_confidence: (K,) 0..1 per pose, how sure its position and axis are (1: its cross-section
         fitted the joint; less where a face was unseen, a dropout bridged, a hole interpolated, or

@@ -103,3 +103,13 @@ def test_a_corner_traced_at_a_grooves_root_is_the_groove_not_a_seam_of_its_own()
     beyond = piece(line([0.115, 0, 0], [0.14, 0, 0]))
     kept = trim_overlaps([groove, root, beyond], tolerance_m=0.004)
     assert [len(seam.positions_m) for seam in kept] == [len(groove.positions_m), len(beyond.positions_m)]
+
+
+def test_a_v_groove_and_a_bevel_piece_end_to_end_are_one_groove_of_the_longer_kind():
+    """A bevel is a special case of the V-groove: where a stretch of a V-groove fits as a bevel
+    (one wall looking square), its pieces still join, and the seam is what most of it is."""
+    groove, bevel = piece(line([0.0, 0, 0], [0.09, 0, 0])), piece(line([0.1, 0, 0], [0.15, 0, 0]), JointKind.BEVEL)
+    (seam,) = join([bevel, groove])
+    assert seam.joint == JointKind.V_GROOVE and np.isclose(np.ptp(seam.positions_m[:, 0]), 0.15)
+    fillet = piece(line([0.1, 0, 0], [0.15, 0, 0]), JointKind.FILLET)
+    assert len(join([groove, fillet])) == 2  # a different joint stays apart

@@ -204,7 +204,7 @@ def test_of_the_models_that_fit_the_closest_outline_wins_whatever_their_order(mo
         def fit(u, w, params):
             outline = ((corner_u - 1.0, 1.0), (corner_u, 0.0), (corner_u + 1.0, 1.0))
             return ProfileFit(kind, corner_u, 0.0, 0.0, -1.0, 0.0, JointGeometry(), outline)
-        return SimpleNamespace(KIND=kind, CENTRED=False, fit=fit)
+        return SimpleNamespace(KIND=kind, CENTRED=False, SPECIALISES=None, fit=fit)
 
     near, far = model(FILLET, 0.002), model(V_GROOVE, 0.006)
     for models in ((near, far), (far, near)):

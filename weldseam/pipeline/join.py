@@ -16,6 +16,7 @@ from scipy.spatial import cKDTree
 from weldseam.config import JoinConfig
 from weldseam.geometry import bend_corner, corner_before, polyline_length, unit
 from weldseam.pipeline.ends import END_BASELINE_M, end_direction
+from weldseam.pipeline.joints import one_joint
 from weldseam.pipeline.trace import TracedSeam
 
 
@@ -101,8 +102,9 @@ def _densified(points: np.ndarray, closed: bool, step_m: float) -> np.ndarray:
 def join_pieces(seams: list[TracedSeam], *, join_m: float, max_turn_deg: float) -> list[TracedSeam]:
     """Join pieces of one seam and close loops.
 
-    Two open pieces of the same joint are joined when an end of one and an end of the other
-    are within `join_m`, face each other (their outward directions differ from opposite by
+    Two open pieces of one joint (joints.one_joint: the same kind, or one a special case of the
+    other; the joined seam takes the kind of the piece with more points) are joined when an end
+    of one and an end of the other are within `join_m`, face each other (their outward directions differ from opposite by
     less than `max_turn_deg`, so a groove turning over a block edge stays one seam) and the
     gap runs along their mean direction (within 60 degrees). Where a third seam also ends (the
     junction of a Y or T) nothing is joined: the branches stay separate seams. An open seam whose own ends meet that way is a closed loop.
@@ -117,7 +119,7 @@ def join_pieces(seams: list[TracedSeam], *, join_m: float, max_turn_deg: float) 
         for i in range(len(pieces)):
             for j in range(i + 1, len(pieces)):
                 first, second = pieces[i], pieces[j]
-                if first.closed or second.closed or first.joint != second.joint:
+                if first.closed or second.closed or not one_joint(first.joint, second.joint):
                     continue
                 others = [piece for k, piece in enumerate(pieces) if k not in (i, j)]
                 candidate = _joined(first, second, join_m, cos_turn, cos_along, others)
@@ -170,7 +172,7 @@ def _joined(
                 positions_m=np.vstack([a, bend_points, b]),
                 torch_axes=np.vstack([axes_a, bend_axes, axes_b]),
                 closed=False,
-                joint=first.joint,
+                joint=first.joint if len(a) >= len(b) else second.joint,
                 confidence=round(weight * first.confidence + (1 - weight) * second.confidence, 3),
                 half_opening_m=weight * first.half_opening_m + (1 - weight) * second.half_opening_m,
                 sources=first.sources | second.sources,

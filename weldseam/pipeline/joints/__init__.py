@@ -3,8 +3,9 @@ a residual and the measured geometry, or no fit with the reason.
 
 A model is a module with `KIND` (a JointKind), `CENTRED` (whether its fit assumes the joint in the
 middle of the section window), `MIN_LENGTH_M` (the shortest seam of its kind, m; 0: as short as
-split.min_seam_length_m allows) and `fit(u, w, params) -> ProfileFit | NoFit` (u ascending), the
-fit with its outline. Adding a joint kind means adding one model module and its entry in MODELS.
+split.min_seam_length_m allows), `SPECIALISES` (the kind it is a special case of, or None) and
+`fit(u, w, params) -> ProfileFit | NoFit` (u ascending), the fit with its outline. Adding a
+joint kind means adding one model module and its entry in MODELS.
 """
 
 from __future__ import annotations
@@ -14,14 +15,18 @@ from dataclasses import replace
 
 import numpy as np
 
-from weldseam.pipeline.joints import fillet, lap, square_butt, v_groove
+from weldseam.pipeline.joints import bevel, fillet, lap, outside_corner, square_butt, v_groove
 from weldseam.config import JointsConfig
 from weldseam.pipeline.joints.base import JointGeometry, JointKind, NoFit, ProfileFit, outline_residual
 
-__all__ = ["MODELS", "min_length_m", "recentred", "JointGeometry", "JointKind", "NoFit", "ProfileFit", "fit_profile"]
+__all__ = ["MODELS", "min_length_m", "one_joint", "recentred", "JointGeometry", "JointKind", "NoFit", "ProfileFit", "fit_profile"]
 
-MODELS = (v_groove, fillet, lap, square_butt)
+MODELS = (v_groove, fillet, lap, square_butt, bevel, outside_corner)
 MIN_PROFILE_POINTS = 12
+# A special case's outline within this fraction of the general kind's residual explains the points
+# as well (noise decides between them): a single bevel whose bevel wall is seen is also a V-groove
+# with its square wall hidden, and the V-groove's outline follows the bevel within the noise.
+TIE_FRACTION = 0.2
 
 
 def fit_profile(
@@ -31,7 +36,8 @@ def fit_profile(
     model's reason; `kinds`: only these models are tried (None: all). Of the models that fit, the
     one whose outline lies closest to the profile's points around its seam (outline_residual,
     within face_radius_m + half its opening) is the joint, its residual_m that distance; on a tie,
-    the first in MODELS."""
+    the first in MODELS. A fit of a kind that SPECIALISES the closest one's kind, within
+    TIE_FRACTION of its residual, is the joint instead: it says more of the same points."""
     if len(u) < MIN_PROFILE_POINTS:
         return NoFit("too few points in the section")
     order = np.argsort(u, kind="stable")
@@ -48,13 +54,27 @@ def fit_profile(
         fits.append(replace(found, residual_m=outline_residual(u, w, found.outline, found.u, reach)))
     if not fits:
         return NoFit("; ".join(reasons))
-    return min(fits, key=lambda fit: fit.residual_m)
+    closest = min(fits, key=lambda fit: fit.residual_m)
+    special = [fit for fit in fits if _specialises(fit.kind, closest.kind)
+               and fit.residual_m <= closest.residual_m * (1 + TIE_FRACTION)]  # fmt: skip
+    return min(special, key=lambda fit: fit.residual_m) if special else closest
 
 
 def recentred(kind: JointKind) -> bool:
     """Whether a fit of this kind assumes the joint in the middle of its window (its model's
     CENTRED), so a fit far off the window's centre is fitted again centred on it."""
     return next(model.CENTRED for model in MODELS if model.KIND == kind)
+
+
+def one_joint(kind: JointKind, other: JointKind) -> bool:
+    """Whether seams of these kinds may be pieces of one joint: the same kind, or one a special
+    case of the other (a V-groove whose one wall looks square over a stretch is still one groove)."""
+    return kind == other or _specialises(kind, other) or _specialises(other, kind)
+
+
+def _specialises(kind: JointKind, general: JointKind) -> bool:
+    """Whether `kind`'s model is a special case of `general` (its SPECIALISES)."""
+    return next(model.SPECIALISES for model in MODELS if model.KIND == kind) == general
 
 
 def min_length_m(kind: JointKind) -> float:

@@ -19,6 +19,8 @@ class JointKind(str, Enum):
     FILLET = "fillet"
     LAP = "lap"
     SQUARE_BUTT = "square_butt"
+    BEVEL = "bevel"
+    OUTSIDE_CORNER = "outside_corner"
 
 
 @dataclass(frozen=True)

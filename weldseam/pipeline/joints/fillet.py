@@ -19,6 +19,7 @@ KIND = JointKind.FILLET
 # Where two fitted lines meet does not depend on where the window sits.
 CENTRED = False
 MIN_LENGTH_M = 0.0
+SPECIALISES = None
 MIN_INCLUDED_DEG = 45.0
 MAX_INCLUDED_DEG = 135.0
 # A face is only as long as the stretch its points fill with gaps of at most this.

@@ -28,6 +28,7 @@ CENTRED = False
 # A top plate's edge runs the plate's length; a shorter step is something lying on the plate: a
 # clamp's arm (20-30 mm wide, reaching 12-25 mm onto it: up to ~50 mm round its end) or a bar's end.
 MIN_LENGTH_M = 0.05
+SPECIALISES = None
 # Thinnest and thickest top plate (m, 2-6 mm with the noise of its measure): a step under 1.5 mm
 # is 1 mm depth quantisation or ripple; a taller one is a wall, a plate's edge on the table or a
 # clamp's arm (6-10 mm thick).

@@ -33,6 +33,7 @@ KIND = JointKind.SQUARE_BUTT
 # The surface line is fitted to the outer halves of the window: the opening must sit in its middle.
 CENTRED = True
 MIN_LENGTH_M = 0.0
+SPECIALISES = None
 UNIQUE_RATIO = 1.3
 # Openings are sought this close to the window's centre: sections are centred on the joint (an
 # extension's prediction drifts by a mm or two), and across a whole window a plate's sampling

@@ -20,6 +20,7 @@ KIND = JointKind.V_GROOVE
 # The surface line is fitted to the outer halves of the window: the groove must sit in its middle.
 CENTRED = True
 MIN_LENGTH_M = 0.0
+SPECIALISES = None
 # The least noise a plate surface is taken to have: depth quantised in 1 mm steps (RealSense
 # and most structured-light cameras), seen square on, leaves most of a flat surface on one level
 # and the next 1 mm below; the median deviation is then ~0 and that level would pass for a

@@ -1,0 +1,221 @@
+"""The outside corner model: two plates meeting at a convex edge, each edge bevelled so they leave an
+open V along the ridge.
+
+The profile is a roof: two straight faces sloping down away from a ridge (a break between two
+lines, the break minimising the total squared error; each face refitted to the half of its points
+farthest from the break), at an outer included angle of MIN_ROOF_DEG-MAX_ROOF_DEG, with a V notch
+where they would meet. Each top edge of the V is where its face ends toward the ridge (the camera
+sees a surface up to its edge; the V's walls are often hidden). Between the edges lies the V: its
+points (if any are seen) at least `groove_min_depth_m` below the roof; a plain ridge, whose faces
+run into each other, is no outside corner. The torch axis is minus the bisector of the two faces'
+outward normals; the V is cut symmetrically about it, so the seam point (the midpoint of the two
+top edges) lies on the bisector through the faces' apex, as deep below the apex as the two top
+edges on average.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from weldseam.config import JointsConfig
+from weldseam.geometry import unit
+from weldseam.pipeline.joints.base import JointGeometry, JointKind, NoFit, ProfileFit
+from weldseam.pipeline.joints.robust import line, median, noise, upper_decile
+
+KIND = JointKind.OUTSIDE_CORNER
+# Where the ridge lies does not depend on where the window sits.
+CENTRED = False
+MIN_LENGTH_M = 0.0
+SPECIALISES = None
+# The outer faces' included angle (degrees): plates at 90 degrees, give or take; flatter is a
+# V-groove in one surface (180), or a pipe's curve.
+MIN_ROOF_DEG = 60.0
+MAX_ROOF_DEG = 140.0
+# Each face runs at least this far from its edge, straight (MIN_INLIER_FRACTION of its side's
+# points within max(3 sigma, SURFACE_BAND_M) of its line; 1 mm depth steps put a face on two
+# levels).
+MIN_FACE_M = 0.006
+MIN_INLIER_FRACTION = 0.7
+SURFACE_BAND_M = 0.0012
+# A face is only as long as the stretch its points fill from its edge with gaps of at most this.
+MAX_FACE_SPACING_M = 0.002
+# The V's opening at the surface (m): a wider gap between the faces is a dropout or two parts.
+MIN_OPENING_M = 0.0015
+MAX_OPENING_M = 0.020
+# A V's depth below its opening: at most 1.37 x its width for an included angle of 40 degrees
+# or more (1 / (2 tan 20)).
+MAX_DEPTH_PER_OPENING = 1.5
+MIN_SIDE_POINTS = 5
+# The least noise a face is taken to have (1 mm depth steps: 1 mm / sqrt(12)), as for the V-groove.
+SURFACE_NOISE_FLOOR_M = 0.0003
+# Points of the V closer than this across the section belong to one V.
+NOTCH_GAP_M = 0.003
+# The gaps between a face's points next to its edge that give its point spacing there.
+EDGE_GAPS = 5
+# A wall's line meets its face at most this far beyond the face's last point; farther, the line
+# is noise.
+WALL_REACH_M = 0.003
+# A face ends at its last point within max(EDGE_SIGMAS sigma, MIN_EDGE_BAND_M) of its line.
+EDGE_SIGMAS = 2.5
+MIN_EDGE_BAND_M = 0.0003
+
+
+def fit(u: np.ndarray, w: np.ndarray, params: JointsConfig) -> ProfileFit | NoFit:
+    """The outside corner in a profile (u ascending), or why there is none."""
+    split = _best_break(u, w)
+    if split is None:
+        return NoFit("too few points for two faces")
+    faces = []
+    for part, away in ((slice(0, split), -1), (slice(split, len(u)), 1)):
+        face = _face(u[part], w[part], away)
+        if face is None:
+            return NoFit("a face is not a straight line")
+        faces.append(face)
+    (a_left, b_left, sigma_left), (a_right, b_right, sigma_right) = faces
+    if not (b_left > 0 > b_right):  # convex: both faces fall away from the ridge
+        return NoFit("the two faces do not form a convex ridge")
+    to_left, to_right = unit(np.array([-1.0, -b_left])), unit(np.array([1.0, b_right]))
+    roof = np.degrees(np.arccos(np.clip(to_left @ to_right, -1.0, 1.0)))
+    if not (MIN_ROOF_DEG <= roof <= MAX_ROOF_DEG):
+        return NoFit("the faces' included angle is outside 60-140 degrees")
+    sigma = max(sigma_left, sigma_right, SURFACE_NOISE_FLOOR_M)
+    depth = np.minimum(a_left + b_left * u, a_right + b_right * u) - w  # below the roof
+    shallow = depth <= max(3 * sigma, 0.4 * params.groove_min_depth_m)
+    apex_u = (a_right - a_left) / (b_left - b_right)
+    notch = _notch(u, ~shallow, apex_u)
+    # The faces end where the V begins (a hidden V: where their points end toward the ridge).
+    left_stop, right_stop = (apex_u, apex_u) if notch is None else (u[notch[0]], u[notch[-1]])
+    left_reach = _face_end(u[shallow & (u < left_stop)], -1)[0]
+    right_reach = _face_end(u[shallow & (u > right_stop)], 1)[0]
+    # Where a face ends: its last point within its own noise of its line (a wall's shallowest points,
+    # within the notch threshold, would put the end inside the edge).
+    on_left = np.abs(w - (a_left + b_left * u)) <= max(EDGE_SIGMAS * sigma_left, MIN_EDGE_BAND_M)
+    on_right = np.abs(w - (a_right + b_right * u)) <= max(EDGE_SIGMAS * sigma_right, MIN_EDGE_BAND_M)
+    _, left_edge, left_seen = _face_end(u[on_left & shallow & (u < left_stop)], -1)
+    _, right_edge, right_seen = _face_end(u[on_right & shallow & (u > right_stop)], 1)
+    if min(left_reach, right_reach) < MIN_FACE_M:
+        return NoFit("a face is shorter than 6 mm beside the V")
+    if right_edge - left_edge < MIN_OPENING_M:
+        return NoFit("the faces run into each other: a plain ridge, no V")
+    if right_edge - left_edge > MAX_OPENING_M:
+        return NoFit("the faces end too far apart for a V (a dropout)")
+    if notch is not None:  # what lies deeper than a V that wide is seen through its root gap
+        apex_above = a_left + b_left * apex_u - (a_left + b_left * left_edge + a_right + b_right * right_edge) / 2
+        notch = notch[depth[notch] <= apex_above + MAX_DEPTH_PER_OPENING * (right_edge - left_edge) + 0.001]
+    if notch is None or len(notch) == 0:
+        deepest, bottom = None, None
+        left_edge, right_edge = left_seen, right_seen
+    else:
+        deepest = upper_decile(depth[notch])
+        if deepest < params.groove_min_depth_m:
+            return NoFit("no V below the ridge (shallower than joints.groove_min_depth_m)")
+        deep = notch[depth[notch] >= 0.8 * deepest]
+        bottom = np.array([median(u[deep]), median(w[deep])])
+        left_edge = _wall_edge(u, w, (a_left, b_left), left_edge, bottom[0], left_seen)
+        right_edge = _wall_edge(u, w, (a_right, b_right), right_edge, bottom[0], right_seen)
+    left = np.array([left_edge, a_left + b_left * left_edge])
+    right = np.array([right_edge, a_right + b_right * right_edge])
+    normal_left, normal_right = np.array([-b_left, 1.0]), np.array([-b_right, 1.0])  # outward
+    axis = -unit(unit(normal_left) + unit(normal_right))
+    # The V is cut symmetrically about the faces' bisector: the seam lies on it (the long faces
+    # place it well), as deep below the apex as the two edges on average. A wall's shallowest
+    # points pass for its face, so one edge may fall up to a millimetre inside; on the bisector
+    # that moves the seam only along the torch axis, by a third of it.
+    apex = np.array([apex_u, a_left + b_left * apex_u])
+    seam = apex + axis * float(((left - apex) @ axis + (right - apex) @ axis) / 2)
+    geometry = JointGeometry(opening_m=float(np.linalg.norm(right - left)), depth_m=deepest,
+                             included_deg=float(roof), legs_m=(left_reach, right_reach))
+    outline = (left + to_left, left, seam if bottom is None else bottom, right, right + to_right)
+    return ProfileFit(KIND, float(seam[0]), float(seam[1]), float(axis[0]), float(axis[1]), float(sigma), geometry,
+                      tuple((float(a), float(b)) for a, b in outline))  # fmt: skip
+
+
+def _notch(u: np.ndarray, deep: np.ndarray, apex_u: float) -> np.ndarray | None:
+    """Indices of the V's points: the run of `deep` points (gaps under NOTCH_GAP_M) nearest the
+    apex, within MAX_OPENING_M / 2 of it; None when none lies there."""
+    index = np.flatnonzero(deep & (np.abs(u - apex_u) <= MAX_OPENING_M / 2))
+    if len(index) == 0:
+        return None
+    runs = np.split(index, np.flatnonzero(np.diff(u[index]) > NOTCH_GAP_M) + 1)
+    return min(runs, key=lambda run: np.abs(u[run] - apex_u).min())
+
+
+def _wall_edge(u, w, face, face_end: float, bottom_u: float, hidden: float) -> float:
+    """Where a V wall meets its face (`face` = (intercept, slope): the line w = intercept +
+    slope u): a line depth = c + m u (depth below the face) through the wall's points between 15
+    and 80 % of the way from the face's end to the V's bottom, solved for depth 0 where it meets
+    the face in range (from WALL_REACH_M beyond the face's end to the wall's middle); where the
+    wall is not seen so (too few points, a narrow V), `hidden`: just past the face's last point,
+    where a hidden wall's edge lies."""
+    intercept, slope = face
+    low, high = sorted((face_end + 0.15 * (bottom_u - face_end), face_end + 0.8 * (bottom_u - face_end)))
+    wall = (u >= low) & (u <= high)
+    count = np.count_nonzero(wall)
+    if count < 4 or high - low < 0.0006:
+        return hidden
+    c, m = line(u[wall], intercept + slope * u[wall] - w[wall])
+    if abs(m) < 0.2:
+        return hidden
+    edge = -c / m
+    side = np.sign(face_end - bottom_u)  # the face lies this way from the bottom
+    inner, outer = float(np.add.reduce(u[wall])) / count, face_end + side * WALL_REACH_M
+    return float(edge) if min(inner, outer) <= edge <= max(inner, outer) else hidden
+
+
+def _face(u: np.ndarray, w: np.ndarray, away: int) -> tuple[float, float, float] | None:
+    """(intercept, slope, noise) of one face's line, or None where it is not straight: started
+    through the half of its points farthest from the break (toward `away`; the V beside the ridge
+    does not tilt it), then twice the points within max(3 sigma, SURFACE_BAND_M) of the line and
+    the line through them."""
+    if len(u) < 2 * MIN_SIDE_POINTS:
+        return None
+    inliers = away * (u - median(u)) >= 0
+    for _ in range(2):
+        intercept, slope = line(u[inliers], w[inliers])
+        residual = w - (intercept + slope * u)
+        inliers = np.abs(residual) <= max(3 * noise(residual), SURFACE_BAND_M)
+        if np.count_nonzero(inliers) < MIN_SIDE_POINTS:
+            return None
+    if inliers.mean() < MIN_INLIER_FRACTION:
+        return None
+    intercept, slope = line(u[inliers], w[inliers])
+    return intercept, slope, noise(w[inliers] - (intercept + slope * u[inliers]))
+
+
+def _face_end(u: np.ndarray, away: int) -> tuple[float, float, float]:
+    """(reach, end, edge) of a face's points at positions u, running away from the ridge toward
+    `away`: its point nearest the ridge, how far from it the points run on with gaps of at most
+    MAX_FACE_SPACING_M (0, nan with no points), and where the face's edge lies when the V's wall
+    beyond it is hidden: half a point spacing (the median of the EDGE_GAPS gaps there) past its
+    last point, the expected distance from an edge to the last sample before it."""
+    if len(u) == 0:
+        return 0.0, float("nan"), float("nan")
+    ordered = np.sort(u)[::away]  # nearest the ridge first
+    steps = np.abs(np.diff(ordered))
+    gaps = np.flatnonzero(steps > MAX_FACE_SPACING_M)
+    last = ordered[gaps[0]] if len(gaps) else ordered[-1]
+    spacing = float(np.median(steps[:EDGE_GAPS])) if len(steps) else 0.0
+    return float(abs(last - ordered[0])), float(ordered[0]), float(ordered[0] - away * spacing / 2)
+
+
+def _best_break(u: np.ndarray, w: np.ndarray) -> int | None:
+    """The break (index of the first point right of it) minimising the residual sum of squares of
+    a line each side, from running sums, or None."""
+    n = len(u)
+    splits = np.arange(2 * MIN_SIDE_POINTS, n - 2 * MIN_SIDE_POINTS + 1)
+    if len(splits) == 0:
+        return None
+    sums = np.cumsum(np.column_stack([np.ones(n), u, w, u * u, u * w, w * w]), axis=0)
+    left = sums[splits - 1]
+    error = _line_error(left) + _line_error(sums[-1] - left)
+    return int(splits[int(np.argmin(error))])
+
+
+def _line_error(sums: np.ndarray) -> np.ndarray:
+    """Residual sum of squares of the least-squares line through points, from their sums
+    [1, u, w, uu, uw, ww] (one row per point set): Cww - Cuw^2 / Cuu with centred sums."""
+    count, su, sw, suu, suw, sww = sums.T
+    var_u = suu - su * su / count
+    cov = suw - su * sw / count
+    var_w = sww - sw * sw / count
+    return var_w - np.divide(cov * cov, var_u, out=np.zeros_like(cov), where=var_u > 1e-12)
