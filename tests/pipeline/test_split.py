@@ -1,6 +1,7 @@
 from dataclasses import replace
 
 import numpy as np
+import pytest
 
 from tests.pipeline.test_join import line, piece
 from weldseam.config import SplitConfig
@@ -32,11 +33,13 @@ def test_a_seam_mostly_interpolated_across_a_hole_is_not_a_seam():
     assert len(split_seams([seam], [], SplitConfig(), step_m=0.002)) == 1
 
 
-def test_a_seam_shorter_than_its_kinds_shortest_is_dropped():
-    """A lap's top plate edge runs the plate's length: a 40 mm step is a clamp's arm on a plate;
-    a 40 mm groove is a seam."""
+@pytest.mark.parametrize("kind", [JointKind.LAP, JointKind.OUTSIDE_CORNER])
+def test_a_seam_shorter_than_its_kinds_shortest_is_dropped(kind):
+    """A lap's top plate edge, or two plates' outside corner, runs the plates' length: a 40 mm step
+    is a clamp's arm on a plate, a 40 mm convex ridge a part's or a bar's edge; a 40 mm groove is
+    a seam."""
     short = line([0, 0, 0], [0.04, 0, 0])
-    kept = split_seams([piece(short, JointKind.LAP), piece(short + [0, 0.1, 0])], [], SplitConfig(), step_m=0.002)
+    kept = split_seams([piece(short, kind), piece(short + [0, 0.1, 0])], [], SplitConfig(), step_m=0.002)
     assert [seam.joint for seam in kept] == [JointKind.V_GROOVE]
-    long_lap = split_seams([piece(line([0, 0, 0], [0.06, 0, 0]), JointKind.LAP)], [], SplitConfig(), step_m=0.002)
-    assert len(long_lap) == 1
+    long_one = split_seams([piece(line([0, 0, 0], [0.06, 0, 0]), kind)], [], SplitConfig(), step_m=0.002)
+    assert len(long_one) == 1

@@ -25,7 +25,9 @@ from weldseam.pipeline.joints.robust import line, median, noise, upper_decile
 KIND = JointKind.OUTSIDE_CORNER
 # Where the ridge lies does not depend on where the window sits.
 CENTRED = False
-MIN_LENGTH_M = 0.0
+# Two plates' corner runs their length; a shorter convex ridge is a part's or a loose bar's edge
+# (a web's top edge, a clamp's jaw), which a dropout along it makes look like a hidden V.
+MIN_LENGTH_M = 0.05
 SPECIALISES = None
 # The outer faces' included angle (degrees): plates at 90 degrees, give or take; flatter is a
 # V-groove in one surface (180), or a pipe's curve.
