@@ -7,6 +7,8 @@ import io
 import json
 import os
 import re
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -129,6 +131,18 @@ def test_round_trip(tmp_path, name, fmt, rotation):
     assert sorted(p.name for p in tmp_path.iterdir()) == [out.name]
 
 
+def test_pose_confidence_reads_back_from_json_and_is_none_from_csv(tmp_path):
+    result = make_result()
+    unsure = np.where(np.arange(21) % 4 == 0, 0.3, np.where(np.arange(21) % 4 == 1, 0.7, 1.0))
+    result = RunResult(paths=(replace(result.paths[0], pose_confidence=unsure), result.paths[1]), record=result.record)
+    write_paths(result, tmp_path / "p.json")
+    write_paths(result, tmp_path / "p.csv")
+    first, ring = read_paths(tmp_path / "p.json")
+    assert first.pose_confidence.tolist() == unsure.tolist()
+    assert ring.pose_confidence.tolist() == [1.0] * 16  # a path without any is written as all 1
+    assert [path.pose_confidence for path in read_paths(tmp_path / "p.csv")] == [None, None]  # CSV has no column
+
+
 def test_write_to_stdout_defaults_to_csv():
     stdout = io.BytesIO()
     write_paths(make_result(), "-", stdout=stdout)
@@ -215,6 +229,9 @@ def expect_error(path, problem: str) -> None:
      "seam 0: id must be an integer, closed a boolean, joint a string and confidence a number"),
     ("p.json", '{"format": "weldseam.path", "seams": [{"id": 4, "poses": [{"x": 1}]}]}',
      "seam 4: poses must be a list of objects with numbers x, y, z, qx, qy, qz, qw"),
+    ("p.json", '{"format": "weldseam.path", "seams": [{"id": 4, "poses": [{"x": 1, "y": 2, "z": 3, "qx": 0, '
+     '"qy": 0, "qz": 0, "qw": 1, "confidence": 1.5}]}]}',
+     "seam 4: a pose's confidence must be a number from 0 to 1"),
     ("p.yaml", "a: 1", r"unknown path file format '\.yaml' \(use \.json or \.csv\)"),
 ])
 def test_bad_path_files(tmp_path, name, content, problem):

@@ -31,3 +31,16 @@ def rng_points_60k(plate_and_path):
     points = np.column_stack([rng.uniform(-0.1, 0.1, 120000), rng.uniform(-0.05, 0.05, 120000),
                               rng.normal(0, 2e-4, 120000)])  # fmt: skip
     return points, paths, record
+
+
+@pytest.fixture(scope="module")
+def unsure_path(plate_and_path):
+    """The plate's path with poses 20-29 interpolated across a hole (0.3) and 50-54 with one face
+    unseen (0.7), and its record as the path JSON writes it."""
+    from dataclasses import replace
+
+    points, (path,), record = plate_and_path
+    confidence = np.ones(len(path.positions_m))
+    confidence[20:30], confidence[50:55] = 0.3, 0.7
+    seam = {**record["seams"][0], "poses": [{"confidence": c} for c in confidence.tolist()]}
+    return points, replace(path, pose_confidence=confidence), {**record, "seams": [seam]}

@@ -5,7 +5,7 @@ import re
 
 import numpy as np
 
-from weldseam.report.figure import make_drawing
+from weldseam.report.figure import CONFIDENCE_RAMP, make_drawing
 from weldseam.report.html import report_html
 
 
@@ -81,3 +81,32 @@ def test_a_report_of_60k_points_stays_under_3_mb_and_is_deterministic(rng_points
     page = report_html(drawing, record, "plate")
     assert len(page.encode("utf-8")) < 3_000_000
     assert report_html(drawing, record, "plate") == page
+
+
+def test_the_path_is_coloured_by_pose_confidence_on_a_scale_with_a_bar(unsure_path):
+    """Issue 21: a pose that rests on an unseen face or an interpolated hole says so on the page."""
+    points, path, record = unsure_path
+    page = report_html(make_drawing(points, [path], point_budget=2000), record, "plate")
+    line = {trace["name"]: trace for trace in embedded_figure(page)}["seam 0 (v_groove)"]
+    for shaded in (line["line"], line["marker"]):
+        assert shaded["color"] == path.pose_confidence.tolist()
+        assert (shaded["cmin"], shaded["cmax"]) == (0, 1)
+        scale = [[stop, tuple(map(int, re.findall(r"\d+", rgb)))] for stop, rgb in shaded["colorscale"]]
+        assert scale[0] == [0, (255, 255, 255)] and scale[-1] == [1, tuple(CONFIDENCE_RAMP[-1])]
+    sizes = np.array(line["marker"]["size"])
+    assert sizes[path.pose_confidence < 1].min() > sizes[path.pose_confidence == 1].max()  # unsure poses stand out
+    assert line["marker"]["showscale"] and line["marker"]["colorbar"]["title"]["text"] == "pose confidence"
+    assert [row[0] for row in line["customdata"]] == list(range(len(path.positions_m)))  # hover: pose index
+    assert [row[1] for row in line["customdata"]] == path.pose_confidence.tolist()  # and its confidence
+    assert "pose %{customdata[0]" in line["hovertemplate"] and "confidence %{customdata[1]" in line["hovertemplate"]
+    cells = re.findall(r"<td>([^<]*)</td>", page)
+    assert cells[4:8] == ["0.90", "0.30", "15", "no"]  # seam confidence, lowest pose's, poses below 1, closed
+    assert "<th>lowest pose confidence</th><th>poses below 1</th>" in page
+
+
+def test_a_path_without_pose_confidence_is_drawn_at_full_confidence(plate_and_path):
+    points, paths, record = plate_and_path  # a WeldPath with pose_confidence None (as read from CSV)
+    page = report_html(make_drawing(points, paths, point_budget=500), record, "plate")
+    line = {trace["name"]: trace for trace in embedded_figure(page)}["seam 0 (v_groove)"]
+    assert line["marker"]["color"] == [1.0] * len(paths[0].positions_m)
+    assert re.findall(r"<td>([^<]*)</td>", page)[4:8] == ["0.90", "1.00", "0", "no"]

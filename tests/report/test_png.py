@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from PIL import Image, ImageDraw
 
-from weldseam.report.figure import make_drawing
+from weldseam.report.figure import confidence_colours, make_drawing
 from weldseam.report.png import HEIGHT, PANEL_RGB, PATH_RGB, TEXT_RGB, VIEW_WIDTH, WIDTH, _Projection, font, report_png
 
 
@@ -23,7 +23,7 @@ def test_the_png_shows_the_scan_and_the_path_where_it_projects(plate_and_path):
     hits = 0
     for x, y in pixels.round().astype(int):
         window = image[y - 2 : y + 3, x - 2 : x + 3].reshape(-1, 3)
-        hits += np.any(np.all(np.abs(window - PATH_RGB[0]) <= 10, axis=1))
+        hits += np.any(np.all(np.abs(window - PATH_RGB) <= 10, axis=1))
     assert hits >= 0.9 * len(pixels)
 
 
@@ -80,3 +80,34 @@ def test_what_does_not_fit_in_the_png_says_where_it_is(plate_and_path):
     panel = png_pixels(make_drawing(points, paths, point_budget=2000), record)[:, VIEW_WIDTH:]
     assert panel_shows(panel, "more seam(s) in the HTML and the path JSON")
     assert panel_shows(panel, "more line(s) in the HTML and the path JSON")
+
+
+def test_the_png_colours_the_path_by_pose_confidence(unsure_path):
+    """The interpolated stretch (0.3) is drawn in its own colour where it projects, the sure
+    stretches stay in the path's red, and the legend carries the confidence scale."""
+    points, path, record = unsure_path
+    drawing = make_drawing(points, [path], point_budget=5000)
+    image = png_pixels(drawing, record).astype(int)
+    project = _Projection(np.vstack([drawing.scan_m, path.positions_m]))
+
+    def share(poses, rgb):
+        pixels = project(path.positions_m[poses])[0].round().astype(int)
+        near = [np.any(np.all(np.abs(image[y - 2 : y + 3, x - 2 : x + 3] - rgb) <= 6, axis=2)) for x, y in pixels]
+        return np.mean(near)
+
+    unsure_rgb = confidence_colours(np.array([0.3]))[0]
+    assert share(slice(22, 28), unsure_rgb) == 1 and share(slice(22, 28), PATH_RGB) == 0
+    assert share(slice(35, 45), PATH_RGB) == 1 and share(slice(35, 45), unsure_rgb) == 0
+    assert share(slice(51, 54), confidence_colours(np.array([0.7]))[0]) == 1
+    legend = image[HEIGHT - 120 :, :400]
+    scale = confidence_colours(np.linspace(0, 1, 5))[1:4]  # the bar's inner colours, not on the path
+    assert all(np.all(np.abs(legend - rgb) <= 3, axis=2).any() for rgb in scale)
+
+
+def test_the_png_panel_says_how_many_poses_are_unsure_and_the_lowest(unsure_path):
+    points, path, record = unsure_path
+    panel = png_pixels(make_drawing(points, [path], point_budget=2000), record)[:, VIEW_WIDTH:]
+    assert panel_shows(panel, "15 pose(s) below confidence 1, lowest 0.30")
+    sure = {**record, "seams": [{**record["seams"][0], "poses": [{}] * 81}]}
+    assert not panel_shows(png_pixels(make_drawing(points, [path], point_budget=2000), sure)[:, VIEW_WIDTH:],
+                           "below confidence 1")  # fmt: skip

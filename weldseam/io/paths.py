@@ -139,8 +139,9 @@ def path_format(out: str | Path, fmt: str | None = None) -> str:
 def read_paths(path: str | Path) -> list[WeldPath]:
     """Read paths back from our JSON, or from a CSV with x, y, z and either rx, ry, rz or
     qx, qy, qz, qw columns (header row required; a `seam` column is optional, rows are
-    grouped by it in order of first appearance). CSV paths get closed=False, joint
-    "v_groove" and confidence 1.0. Raises InputError for anything unreadable."""
+    grouped by it in order of first appearance). JSON poses keep their confidence (1 where a
+    pose has none); CSV paths get closed=False, joint "v_groove", confidence 1.0 and no pose
+    confidence (None: all 1). Raises InputError for anything unreadable."""
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in (".json", ".csv"):
@@ -253,7 +254,10 @@ def _read_json(text: str, path: Path) -> list[WeldPath]:
                 f"{path}: seam {seam_id}: poses must be a list of objects with numbers "
                 f"{', '.join(POSE_KEYS[:7])}"
             ) from None
-        pose_confidence = np.array([pose.get("confidence", 1.0) for pose in seam["poses"]], dtype=np.float64)
+        pose_confidence = [pose.get("confidence", 1.0) for pose in seam["poses"]]
+        if not all(type(c) in (int, float) and 0 <= c <= 1 for c in pose_confidence):
+            raise InputError(f"{path}: seam {seam_id}: a pose's confidence must be a number from 0 to 1")
+        pose_confidence = np.array(pose_confidence, dtype=np.float64)
         paths.append(replace(_weld_path(
             path, seam_id, table, "quat", closed=closed, joint=joint, confidence=float(confidence),
         ), pose_confidence=pose_confidence))

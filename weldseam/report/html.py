@@ -18,15 +18,16 @@ import json
 
 import numpy as np
 
-from weldseam.report.figure import RAMP, Drawing
+from weldseam.report.figure import CONFIDENCE_RAMP, RAMP, Drawing, pose_summary
 
 FIGURE_ID = "weldseam-figure"
-PATH_COLOURS = ("#e6194b", "#f58231", "#ff00ff", "#ff4500", "#dc143c", "#ff69b4")
 # Scan points to 0.1 mm; paths, arrows and marks to 1 um (they are few, and hovering shows them).
 SCAN_DECIMALS = 4
 PATH_DECIMALS = 6
-# Colour values to 1/1000 of their colour span.
+# Colour values to 1/1000 of their colour span; pose confidences as the path JSON writes them.
 COLOUR_STEPS = 1000
+CONFIDENCE_DECIMALS = 3
+UNSURE_MARKER_PX = 8
 # Room on the right for the colour bar, its ticks and its title (they were cut off at 0).
 MARGIN_RIGHT_PX = 110
 
@@ -47,12 +48,10 @@ def figure_dict(drawing: Drawing, title: str) -> dict:
             "marker": {
                 "size": 1.5,
                 "color": np.round(drawing.scan_values, value_decimals),
-                "colorscale": [
-                    [k / (len(RAMP) - 1), f"rgb({r:.0f},{g:.0f},{b:.0f})"] for k, (r, g, b) in enumerate(RAMP)
-                ],
+                "colorscale": _colour_scale(RAMP),
                 "cmin": float(low),
                 "cmax": float(high),
-                "colorbar": {"title": {"text": drawing.value_name}, "len": 0.5},
+                "colorbar": {"title": {"text": drawing.value_name}, "len": 0.45, "y": 0.75},
             },
             "hoverinfo": "skip",
         }
@@ -72,8 +71,11 @@ def figure_dict(drawing: Drawing, title: str) -> dict:
             }
         )
     for k, seam in enumerate(drawing.seams):
-        colour = PATH_COLOURS[k % len(PATH_COLOURS)]
         p = np.round(seam.positions_m, PATH_DECIMALS)
+        confidence = np.round(seam.pose_confidence, CONFIDENCE_DECIMALS)
+        # One scale for every seam's poses, its bar drawn once (below the scan's).
+        shade = {"color": confidence, "colorscale": _colour_scale(CONFIDENCE_RAMP), "cmin": 0.0, "cmax": 1.0}
+        bar = {"showscale": True, "colorbar": {"title": {"text": "pose confidence"}, "len": 0.45, "y": 0.25}}
         traces.append(
             {
                 "type": "scatter3d",
@@ -82,9 +84,15 @@ def figure_dict(drawing: Drawing, title: str) -> dict:
                 "x": p[:, 0],
                 "y": p[:, 1],
                 "z": p[:, 2],
-                "line": {"color": colour, "width": 6},
-                "marker": {"size": 2, "color": colour},
-                "hovertemplate": f"seam {seam.seam_id}<br>x %{{x:.4f}}<br>y %{{y:.4f}}<br>z %{{z:.4f}}<extra></extra>",
+                "customdata": np.column_stack([np.arange(len(p)), confidence]),
+                "line": {**shade, "width": 6},
+                # Unsure poses get big dots: a pale stretch of line alone is lost on a bright scan.
+                "marker": {**shade, "size": np.where(confidence < 1, UNSURE_MARKER_PX, 2),
+                           "line": {"color": "#333333", "width": 1}, **(bar if k == 0 else {})},
+                "hovertemplate": (
+                    f"seam {seam.seam_id} pose %{{customdata[0]:d}}<br>confidence %{{customdata[1]:.2f}}"
+                    "<br>x %{x:.4f}<br>y %{y:.4f}<br>z %{z:.4f}<extra></extra>"
+                ),
             }
         )
         segments = np.full((3 * len(seam.arrow_tails_m), 3), np.nan)
@@ -125,6 +133,11 @@ def figure_dict(drawing: Drawing, title: str) -> dict:
         "scene": _scene(drawing),
     }
     return {"data": traces, "layout": layout}
+
+
+def _colour_scale(ramp: np.ndarray) -> list:
+    """A plotly colorscale through the evenly spaced RGB stops of `ramp`."""
+    return [[k / (len(ramp) - 1), f"rgb({r:.0f},{g:.0f},{b:.0f})"] for k, (r, g, b) in enumerate(ramp)]
 
 
 def _scene(drawing: Drawing) -> dict:
@@ -190,7 +203,7 @@ class _ArrayEncoder(json.JSONEncoder):
 
 def _panel(record: dict) -> str:
     seams = record.get("seams", [])
-    rows = "".join(_seam_row(seam) for seam in seams) or '<tr><td colspan="6">no seam found</td></tr>'
+    rows = "".join(_seam_row(seam) for seam in seams) or '<tr><td colspan="8">no seam found</td></tr>'
     timings = record.get("timings_s", {})
     timing_rows = "".join(f"<tr><td>{html.escape(k)}</td><td>{v * 1000:.1f}</td></tr>" for k, v in timings.items())
     total = sum(timings.values())
@@ -200,7 +213,7 @@ def _panel(record: dict) -> str:
     params = html.escape(json.dumps(record.get("params", {}), indent=2))
     return (
         f"<section><h2>Seams</h2><table><tr><th>id</th><th>joint</th><th>length mm</th><th>poses</th>"
-        f"<th>confidence</th><th>closed</th></tr>{rows}</table>"
+        f"<th>confidence</th><th>lowest pose confidence</th><th>poses below 1</th><th>closed</th></tr>{rows}</table>"
         f"<h2>Warnings</h2><ul>{warning_items}</ul>"
         f"<h2>Input</h2><p>{html.escape(str(source.get('path', '')))}<br>{source.get('points', '')} points<br>"
         f"<small>sha256 {html.escape(str(source.get('sha256', '')))}</small></p></section>"
@@ -212,12 +225,15 @@ def _panel(record: dict) -> str:
 
 
 def _seam_row(seam: dict) -> str:
+    lowest, below = pose_summary(seam)
     cells = (
         seam.get("id"),
         html.escape(str(seam.get("joint"))),
         f"{seam.get('length_m', 0) * 1000:.1f}",
         len(seam.get("poses", [])),
         f"{seam.get('confidence', 0):.2f}",
+        f"{lowest:.2f}",
+        below,
         "yes" if seam.get("closed") else "no",
     )
     return "<tr>" + "".join(f"<td>{cell}</td>" for cell in cells) + "</tr>"

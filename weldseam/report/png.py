@@ -1,7 +1,8 @@
 """A static PNG of the report, drawn with Pillow (no browser): on the left the view, the scan as
-depth-sorted splats coloured like the HTML, the paths, torch arrows and start/end marks on top;
-on the right the HTML's panel of seams (id, joint, length, poses, confidence, closed) and
-warnings. Timings and parameters are in the HTML and the path JSON."""
+depth-sorted splats coloured like the HTML, the paths coloured by pose confidence, torch arrows
+and start/end marks on top, and a legend with the confidence scale; on the right the HTML's
+panel of seams (id, joint, length, poses, confidence, closed, and under a seam with unsure poses
+how many and the lowest) and warnings. Timings and parameters are in the HTML and the path JSON."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ import io
 
 import numpy as np
 
-from weldseam.report.figure import Drawing, colours
+from weldseam.report.figure import CONFIDENCE_RAMP, Drawing, colours, confidence_colours, pose_summary
 
 VIEW_WIDTH, PANEL_WIDTH, HEIGHT, MARGIN = 1200, 460, 800, 40
 WIDTH = VIEW_WIDTH + PANEL_WIDTH
@@ -20,7 +21,9 @@ PANEL_RGB, TEXT_RGB = (255, 255, 255), (0, 0, 0)
 SEAM_COLUMNS = (("id", 24), ("joint", 0), ("length mm", 230), ("poses", 290), ("confidence", 375), ("closed", 430))
 JOINT_LEFT_PX = 40
 ELEVATION_DEG, AZIMUTH_DEG = 40.0, -60.0
-PATH_RGB = ((230, 25, 75), (245, 130, 49), (255, 0, 255), (255, 69, 0), (220, 20, 60), (255, 105, 180))
+# The path at full confidence (CONFIDENCE_RAMP's top); below 1 it pales through amber to white.
+PATH_RGB = tuple(int(c) for c in CONFIDENCE_RAMP[-1])
+CONFIDENCE_BAR_PX = 120
 
 
 def view_axes(elevation_deg: float = ELEVATION_DEG, azimuth_deg: float = AZIMUTH_DEG) -> np.ndarray:
@@ -83,11 +86,8 @@ def report_png(drawing: Drawing, record: dict, title: str) -> bytes:
     if len(drawing.candidates_m):
         for x, y in project(drawing.candidates_m)[0]:
             draw.point((x, y), fill=(0, 190, 255))
-    legend = [(f"scan coloured by {drawing.value_name}", (33, 145, 140))]
-    for k, seam in enumerate(drawing.seams):
-        colour = PATH_RGB[k % len(PATH_RGB)]
-        line = [tuple(p) for p in project(seam.positions_m)[0]]
-        draw.line(line, fill=colour, width=4, joint="curve")
+    for seam in drawing.seams:
+        _draw_path(draw, project(seam.positions_m)[0], seam.pose_confidence)
         tails, heads = project(seam.arrow_tails_m)[0], project(seam.arrow_heads_m)[0]
         for tail, head in zip(tails, heads):
             draw.line([tuple(tail), tuple(head)], fill=(30, 30, 30), width=2)
@@ -96,21 +96,50 @@ def report_png(drawing: Drawing, record: dict, title: str) -> bytes:
         ):
             draw.rectangle([x - 5, y - 5, x + 5, y + 5], fill=fill, outline=(0, 0, 0))
             draw.text((x + 8, y - 14), f"{seam.seam_id} {name}", fill=(0, 0, 0))
-        legend.append((seam.label, colour))
     draw.text((MARGIN, 10), title, fill=TEXT_RGB, font=font())
-    top = HEIGHT - MARGIN - 16 * len(legend) - 4
-    draw.rectangle(
-        [MARGIN - 4, top, MARGIN + 24 + 7 * max(len(text) for text, _ in legend), HEIGHT - MARGIN + 4],
-        fill=(255, 255, 255),
-    )
-    for row, (text, colour) in enumerate(legend):
-        y = HEIGHT - MARGIN - 16 * (len(legend) - row)
-        draw.rectangle([MARGIN, y + 2, MARGIN + 18, y + 10], fill=colour)
-        draw.text((MARGIN + 24, y), text, fill=(0, 0, 0))
+    _draw_legend(draw, drawing)
     _draw_panel(draw, record)
     buffer = io.BytesIO()
     image.save(buffer, format="PNG")
     return buffer.getvalue()
+
+
+def _draw_path(draw, pixels: np.ndarray, confidence: np.ndarray) -> None:
+    """The path through `pixels` (K, 2), each stretch between two poses in the colour of the less
+    sure one, so an unsure pose shows on both sides of it."""
+    if len(pixels) == 1:
+        x, y = pixels[0]
+        draw.ellipse([x - 2, y - 2, x + 2, y + 2], fill=tuple(confidence_colours(confidence)[0].tolist()))
+        return
+    # A dark rim under the whole path, so its pale (unsure) stretches stand out on any scan colour.
+    draw.line([tuple(p) for p in pixels], fill=(40, 40, 40), width=8, joint="curve")
+    rgb = confidence_colours(np.minimum(confidence[:-1], confidence[1:]))
+    for start, end, colour in zip(pixels[:-1], pixels[1:], rgb.tolist()):
+        draw.line([tuple(start), tuple(end)], fill=tuple(colour), width=5)
+
+
+def _draw_legend(draw, drawing: Drawing) -> None:
+    """Bottom left: what colours the scan, each seam's label, and the pose-confidence scale 0..1."""
+    rows = [(f"scan coloured by {drawing.value_name}", (33, 145, 140))]
+    rows += [(seam.label, PATH_RGB) for seam in drawing.seams]
+    rows += [("pose confidence", None)] if drawing.seams else []
+    width = max((24 if colour else 26 + CONFIDENCE_BAR_PX) + 7 * len(text) for text, colour in rows)
+    draw.rectangle([MARGIN - 4, HEIGHT - MARGIN - 16 * len(rows) - 4, MARGIN + width, HEIGHT - MARGIN + 4],
+                   fill=(255, 255, 255))  # fmt: skip
+    for row, (text, colour) in enumerate(rows):
+        y = HEIGHT - MARGIN - 16 * (len(rows) - row)
+        if colour is not None:
+            draw.rectangle([MARGIN, y + 2, MARGIN + 18, y + 10], fill=colour)
+            draw.text((MARGIN + 24, y), text, fill=(0, 0, 0))
+            continue
+        # The scale: "0", a bar from white to the path's red, "1", then the name.
+        draw.text((MARGIN, y), "0", fill=(0, 0, 0))
+        left = MARGIN + 10
+        for k, colour in enumerate(confidence_colours(np.linspace(0, 1, CONFIDENCE_BAR_PX)).tolist()):
+            draw.line([(left + k, y + 2), (left + k, y + 10)], fill=tuple(colour))
+        draw.rectangle([left - 1, y + 1, left + CONFIDENCE_BAR_PX, y + 11], outline=(120, 120, 120))
+        draw.text((left + CONFIDENCE_BAR_PX + 4, y), "1", fill=(0, 0, 0))
+        draw.text((left + CONFIDENCE_BAR_PX + 16, y), text, fill=(0, 0, 0))
 
 
 def _draw_panel(draw, record: dict) -> None:
@@ -124,17 +153,22 @@ def _draw_panel(draw, record: dict) -> None:
     draw.text((left, y), "Seams", fill=TEXT_RGB, font=font())
     y += LINE_PX
     seams = record.get("seams", [])
-    rows = [tuple(name for name, _ in SEAM_COLUMNS)] + [_seam_cells(seam) for seam in seams]
+    # A seam with unsure poses gets a second line: how many, and the lowest confidence.
+    rows = [tuple(name for name, _ in SEAM_COLUMNS)] + [row for seam in seams for row in _seam_rows(seam)]
     # Leave room for the warnings heading and at least one warning line below the table.
     shown = _fitting(len(rows), (bottom - y) // LINE_PX - 3)
     for row in rows[:shown]:
-        _draw_row(draw, left, y, row)
+        if isinstance(row, str):
+            draw.text((left + JOINT_LEFT_PX, y), row, fill=TEXT_RGB, font=font())
+        else:
+            _draw_row(draw, left, y, row)
         y += LINE_PX
     if not seams:
         draw.text((left, y), "no seam found", fill=TEXT_RGB, font=font())
         y += LINE_PX
     elif shown < len(rows):
-        draw.text((left, y), f"... {len(rows) - shown} more seam(s) in the HTML and the path JSON", fill=TEXT_RGB,
+        left_out = sum(not isinstance(row, str) for row in rows[shown:])
+        draw.text((left, y), f"... {left_out} more seam(s) in the HTML and the path JSON", fill=TEXT_RGB,
                   font=font())  # fmt: skip
         y += LINE_PX
     y += LINE_PX // 2
@@ -156,8 +190,9 @@ def _fitting(count: int, room: int) -> int:
     return count if count <= room else max(room - 1, 0)
 
 
-def _seam_cells(seam: dict) -> tuple[str, ...]:
-    return (
+def _seam_rows(seam: dict) -> list:
+    """A seam's table row (cells), and a line of text when some of its poses are below 1."""
+    cells = (
         str(seam.get("id")),
         str(seam.get("joint")),
         f"{seam.get('length_m', 0) * 1000:.1f}",
@@ -165,6 +200,8 @@ def _seam_cells(seam: dict) -> tuple[str, ...]:
         f"{seam.get('confidence', 0):.2f}",
         "yes" if seam.get("closed") else "no",
     )
+    lowest, below = pose_summary(seam)
+    return [cells, f"{below} pose(s) below confidence 1, lowest {lowest:.2f}"] if below else [cells]
 
 
 def _draw_row(draw, left: int, y: int, cells: tuple[str, ...]) -> None:
