@@ -26,18 +26,24 @@ from scipy.spatial import cKDTree
 from weldseam.config import ExtendConfig
 from weldseam.geometry import arc_lengths, bend_corner, polyline_length, unit
 from weldseam.pipeline.bridge import GrooveTemplate, groove_template, part_ends_ahead
-from weldseam.pipeline.ends import END_BASELINE_M, TANGENT_BASELINE_M, end_curve
+from weldseam.pipeline.ends import END_BASELINE_M, TANGENT_BASELINE_M, ahead, end_curve
 from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.parallel import map_shared
-from weldseam.pipeline.section import FineSurface, SectionFit, section_frames
+from weldseam.pipeline.section import FineSurface, PointFlag, SectionFit, section_frames
 from weldseam.pipeline.holes import across_hole, hole_aim, hole_of
-from weldseam.pipeline.seek import Extension, next_fit
+from weldseam.pipeline.seek import Extension, next_fit, offsets
 from weldseam.pipeline.tacks import across_tack
 from weldseam.pipeline.turn import turned_run
 from weldseam.pipeline.trace import Hole, TracedSeam
 
 # The groove template a bridged section assumes: the median of this many latest fits.
 TEMPLATE_MEMORY = 6
+# A corner fitted with one face unseen lies at most this share of its arc from the last fit with
+# both faces seen off the curve fitted there. Past a standing pipe's silhouette the plate's
+# visible end (the shadow's edge) runs on along the line of sight, straight: it leaves a ring of
+# radius R by d^2 / 2R, 12.5 % of d at d = R / 4. The curve (a parabola, its bend clamped at 30 mm:
+# ends.MIN_BEND_RADIUS_M) stays within 8 % of d of a 50 mm ring for 34 mm, and of a 25 mm ring.
+ONE_FACE_DRIFT = 0.08
 
 
 @dataclass(frozen=True)
@@ -146,20 +152,34 @@ def _extended(seam: TracedSeam, start: list[Step], start_stop, end: list[Step], 
 class SeamEnd:
     """An end being extended: its points, torch axes and which were bridged (travel order, the
     end last), where its current face begins (after a turn over an edge), the curve it is
-    predicted along, and the groove templates of its fits (a groove only)."""
+    predicted along, the groove templates of its fits (a groove only), and the curve at its last
+    fit with both faces seen: (index, direction, bend)."""
 
     positions: list
     axes: list
     bridged: list
     direction: np.ndarray
     bend: np.ndarray
+    step_m: float
     templates: list = field(default_factory=list)
     face_start: int = 0
+    last_full: tuple = ()
 
     @property
     def fitted(self) -> np.ndarray:
         """The fitted (not bridged) points on the current face."""
         return np.array(self.positions[self.face_start:])[~np.array(self.bridged[self.face_start:])]
+
+    def on_curve(self, point: np.ndarray) -> bool:
+        """Whether `point` (3,), reached from the last point, lies within max(half a step,
+        ONE_FACE_DRIFT x its arc) of the curve at the last fit with both faces seen, sideways of
+        the torch axis."""
+        index, direction, bend = self.last_full
+        anchor = np.asarray(self.positions[index])
+        arc = polyline_length(np.array(self.positions[index:])) + float(np.linalg.norm(point - self.positions[-1]))
+        predicted, travel = ahead(anchor, direction, bend, arc)
+        _, sideways = offsets(point, predicted, travel, self.axes[-1])
+        return sideways <= max(0.5 * self.step_m, ONE_FACE_DRIFT * arc)
 
     def heading(self) -> tuple[np.ndarray, np.ndarray]:
         """(direction, bend) to predict the next step along: past bridged points along the curve
@@ -195,6 +215,9 @@ class SeamEnd:
         fitted = self.fitted
         if len(fitted) >= 3:
             self.direction, self.bend = end_curve(fitted)
+        last = step.fits[-1]
+        if not (last.bridged or last.flags & PointFlag.ONE_FACE):
+            self.last_full = (len(self.positions) - 1, self.direction, self.bend)
 
 
 def extend_end(extension: Extension, seam_positions, seam_axes) -> tuple[list[Step], Step | None]:
@@ -207,8 +230,10 @@ def extend_end(extension: Extension, seam_positions, seam_axes) -> tuple[list[St
     arc = arc_lengths(positions)
     elsewhere = positions[arc < arc[-1] - 2 * END_BASELINE_M]
     elsewhere_tree = cKDTree(elsewhere) if len(elsewhere) else None
-    end = SeamEnd(list(seam_positions), list(seam_axes), [False] * len(positions), *end_curve(positions),
-                  templates=_end_templates(extension, positions, np.array(seam_axes)))  # fmt: skip
+    curve = end_curve(positions)
+    end = SeamEnd(list(seam_positions), list(seam_axes), [False] * len(positions), *curve, params.step_m,
+                  templates=_end_templates(extension, positions, np.array(seam_axes)),
+                  last_full=(len(positions) - 1, *curve))  # fmt: skip
     steps: list[Step] = []
     for _ in range(int(params.max_extension_m / params.step_m)):
         step = next((found for strategy in STRATEGIES if (found := strategy(extension, end)) is not None), STOP)
@@ -222,10 +247,15 @@ def extend_end(extension: Extension, seam_positions, seam_axes) -> tuple[list[St
 
 
 def _next_step(extension: Extension, end: SeamEnd) -> Step | None:
-    """The next fit ahead along the predicted curve (seek.next_fit, bridged over dropouts)."""
+    """The next fit ahead along the predicted curve (seek.next_fit, bridged over dropouts); a
+    corner with one face unseen only near the curve of the last fit with both faces seen
+    (SeamEnd.on_curve): past a pipe's silhouette the end of the plate seen is a shadow's edge,
+    running off the pipe's foot along the line of sight."""
     direction, bend = end.heading()
     fit = next_fit(extension, end.positions[-1], end.axes[-1], direction, bend, end.template())
-    return None if fit is None else Step([fit])
+    if fit is None or (fit.flags & PointFlag.ONE_FACE and not end.on_curve(fit.point_m)):
+        return None
+    return Step([fit])
 
 
 def _turn_step(extension: Extension, end: SeamEnd) -> Step | None:
