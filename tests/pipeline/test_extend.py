@@ -326,3 +326,15 @@ def test_corners_with_one_face_unseen_are_followed_only_along_the_curve_of_the_f
         assert len(points) >= 15 and off_ring.max() < 1e-9
     else:
         assert 2 <= len(points) <= 5 and off_ring.max() < 0.001
+
+
+def test_a_seam_seen_with_one_face_all_along_is_extended_by_its_one_face_corners(monkeypatch):
+    """A T-joint seen from above has one face unseen along its whole length: with no fit of both
+    faces to hold them to, its one-face corners carry it on wherever they lead."""
+    monkeypatch.setattr(extend, "next_fit", one_face_ahead(on_ring=False))
+    monkeypatch.setattr(extend, "STRATEGIES", (extend._next_step,))
+    seam = ring_arc(-1.0, STEP_M / RING_RADIUS_M / 2)
+    flags = np.full(len(seam.positions_m), int(PointFlag.ONE_FACE), np.uint8)
+    extension = Extension(None, JointKind.FILLET, replace(ExtendConfig(), max_extension_m=0.05))
+    steps, _ = extend.extend_end(extension, seam.positions_m, seam.torch_axes, flags)
+    assert len(steps) == 25

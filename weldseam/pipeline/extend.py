@@ -96,12 +96,13 @@ def extend_seam(seam: TracedSeam, surface: FineSurface, params: ExtendConfig) ->
     if seam.closed or len(seam.positions_m) < 2:
         return seam
     extension = Extension(surface, seam.joint, params)
-    start, start_stop = extend_end(extension, seam.positions_m[::-1], seam.torch_axes[::-1])
+    start, start_stop = extend_end(extension, seam.positions_m[::-1], seam.torch_axes[::-1], seam.point_flags[::-1])
     before = _fits(start)[::-1]
     end, end_stop = extend_end(
         extension,
         np.array([f.point_m for f in before] + list(seam.positions_m)),
         np.array([f.torch_axis for f in before] + list(seam.torch_axes)),
+        np.array([f.flags for f in before] + list(seam.point_flags), np.uint8),
     )
     return _extended(seam, start, start_stop, end, end_stop)
 
@@ -113,7 +114,8 @@ def _extension_job(surface: FineSurface, job) -> tuple[list[Step], Step | None] 
     if at_start is None:
         return extend_seam(seam, surface, params)
     order = slice(None, None, -1) if at_start else slice(None)
-    return extend_end(Extension(surface, seam.joint, params), seam.positions_m[order], seam.torch_axes[order])
+    return extend_end(Extension(surface, seam.joint, params), seam.positions_m[order], seam.torch_axes[order],
+                      seam.point_flags[order])  # fmt: skip
 
 
 def _fits(steps: list[Step]) -> list[SectionFit]:
@@ -173,7 +175,9 @@ class SeamEnd:
     def on_curve(self, point: np.ndarray) -> bool:
         """Whether `point` (3,), reached from the last point, lies within max(half a step,
         ONE_FACE_DRIFT x its arc) of the curve at the last fit with both faces seen, sideways of
-        the torch axis."""
+        the torch axis; True when the seam has no such fit."""
+        if not self.last_full:
+            return True
         index, direction, bend = self.last_full
         anchor = np.asarray(self.positions[index])
         arc = polyline_length(np.array(self.positions[index:])) + float(np.linalg.norm(point - self.positions[-1]))
@@ -220,7 +224,7 @@ class SeamEnd:
             self.last_full = (len(self.positions) - 1, self.direction, self.bend)
 
 
-def extend_end(extension: Extension, seam_positions, seam_axes) -> tuple[list[Step], Step | None]:
+def extend_end(extension: Extension, seam_positions, seam_axes, seam_flags=None) -> tuple[list[Step], Step | None]:
     """The steps that extend a seam (points and axes in travel order) beyond its last point
     (see the module), and the step that stopped it where it came within two steps of the seam
     away from this end (None if it stopped otherwise)."""
@@ -230,10 +234,9 @@ def extend_end(extension: Extension, seam_positions, seam_axes) -> tuple[list[St
     arc = arc_lengths(positions)
     elsewhere = positions[arc < arc[-1] - 2 * END_BASELINE_M]
     elsewhere_tree = cKDTree(elsewhere) if len(elsewhere) else None
-    curve = end_curve(positions)
-    end = SeamEnd(list(seam_positions), list(seam_axes), [False] * len(positions), *curve, params.step_m,
+    end = SeamEnd(list(seam_positions), list(seam_axes), [False] * len(positions), *end_curve(positions), params.step_m,
                   templates=_end_templates(extension, positions, np.array(seam_axes)),
-                  last_full=(len(positions) - 1, *curve))  # fmt: skip
+                  last_full=_last_full(positions, seam_flags))  # fmt: skip
     steps: list[Step] = []
     for _ in range(int(params.max_extension_m / params.step_m)):
         step = next((found for strategy in STRATEGIES if (found := strategy(extension, end)) is not None), STOP)
@@ -244,6 +247,16 @@ def extend_end(extension: Extension, seam_positions, seam_axes) -> tuple[list[St
         steps.append(step)
         end.add(step, extension)
     return steps, None
+
+
+def _last_full(positions: np.ndarray, flags: np.ndarray | None) -> tuple:
+    """(index, direction, bend) of a seam's last point fitted with both faces seen (`flags`: its
+    points' PointFlag bits, None: all were) and the curve of the seam up to it; () when there is
+    none (a T-joint seen from above all along: its one-face corners are the seam)."""
+    full = np.arange(len(positions)) if flags is None else np.flatnonzero((np.asarray(flags) & PointFlag.ONE_FACE) == 0)
+    if len(full) == 0 or full[-1] < 1:
+        return ()
+    return (int(full[-1]), *end_curve(positions[: full[-1] + 1]))
 
 
 def _next_step(extension: Extension, end: SeamEnd) -> Step | None:
