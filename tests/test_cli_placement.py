@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 from tests.test_cli import one_error_line, weldseam
@@ -164,7 +165,10 @@ def test_a_depth_image_without_a_pose_is_recorded_in_the_camera_frame_with_its_w
     in_camera = read_paths(out)[0].positions_m
     in_base = read_paths(tmp_path / "base.json")[0].positions_m
     mapped = in_base @ T_BASE_CAMERA[:3, :3] - T_BASE_CAMERA[:3, 3] @ T_BASE_CAMERA[:3, :3]  # R^T (p - t)
-    assert np.abs(np.median(in_camera, axis=0) - np.median(mapped, axis=0)).max() < 0.002
+    # Point for point within 2 mm of each other: the two plans space their poses differently
+    # along the seam (a median of the poses moves by a spacing when one lands on the other side).
+    assert cKDTree(mapped).query(in_camera)[0].max() < 0.002
+    assert cKDTree(in_camera).query(mapped)[0].max() < 0.002
 
 
 def test_plan_uses_the_pose_file_beside_the_scan_says_so_and_records_it(reference, tmp_path):

@@ -7,9 +7,12 @@ from tests.pipeline.test_section import surface_of
 from weldseam.config import ExtendConfig
 from weldseam.geometry import polyline_length
 from weldseam.pipeline.ends import end_curve
+from weldseam.pipeline import extend
 from weldseam.pipeline.extend import extend_seam, extend_seams
 from weldseam.pipeline.holes import HOLE_EDGE_M, hole_aim
 from weldseam.pipeline.parallel import worker_process
+from weldseam.pipeline.section import PointFlag, SectionFit
+from weldseam.pipeline.seek import Extension
 from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.trace import TracedSeam
 
@@ -286,3 +289,52 @@ def test_extending_the_ends_apart_gives_the_seams_extended_one_end_after_the_oth
         assert serial.holes == parallel.holes and serial.closed == parallel.closed
 
 
+
+
+def one_face_ahead(on_ring: bool):
+    """A stand-in for seek.next_fit giving a corner with one face unseen a step ahead: on the ring
+    of RING_RADIUS_M (a fillet's foot), or on the tangent line from the ring's point at angle 0
+    (a shadow's edge past a standing pipe's silhouette, running off along the line of sight)."""
+
+    def fit(extension, last_point, last_axis, direction, bend, template=None):
+        if on_ring:
+            angle = np.arctan2(last_point[1], last_point[0]) + STEP_M / RING_RADIUS_M
+            point = RING_RADIUS_M * np.array([np.cos(angle), np.sin(angle), 0.0])
+        else:
+            point = last_point + STEP_M * np.array([0.0, 1.0, 0.0])
+        return SectionFit(JointKind.FILLET, point, np.array([0.0, 0.0, -1.0]), flags=int(PointFlag.ONE_FACE))
+
+    return fit
+
+
+@pytest.mark.parametrize("on_ring", [True, False])
+def test_corners_with_one_face_unseen_are_followed_only_along_the_curve_of_the_full_fits(monkeypatch, on_ring):
+    """A ring fillet (radius 50 mm) traced up to angle 0 with both faces seen, then extended by
+    corners with one face seen: along the ring they carry it on (for 30 mm at least: the curve
+    predicted from the full fits is a parabola, ~8 % of the arc off the ring by 35 mm); along the ring's tangent (the
+    visible end of the plate in the pipe's shadow) they are taken only while they stay within
+    8 % of their arc of the ring (d^2 / 2R: the first 8 mm), and the seam never leaves it by a
+    millimetre."""
+    monkeypatch.setattr(extend, "next_fit", one_face_ahead(on_ring))
+    monkeypatch.setattr(extend, "STRATEGIES", (extend._next_step,))
+    seam = ring_arc(-1.0, STEP_M / RING_RADIUS_M / 2)
+    extension = Extension(None, JointKind.FILLET, replace(ExtendConfig(), max_extension_m=0.05))
+    steps, _ = extend.extend_end(extension, seam.positions_m, seam.torch_axes)
+    points = np.array([fit.point_m for step in steps for fit in step.fits])
+    off_ring = np.abs(np.linalg.norm(points[:, :2], axis=1) - RING_RADIUS_M)
+    if on_ring:
+        assert len(points) >= 15 and off_ring.max() < 1e-9
+    else:
+        assert 2 <= len(points) <= 5 and off_ring.max() < 0.001
+
+
+def test_a_seam_seen_with_one_face_all_along_is_extended_by_its_one_face_corners(monkeypatch):
+    """A T-joint seen from above has one face unseen along its whole length: with no fit of both
+    faces to hold them to, its one-face corners carry it on wherever they lead."""
+    monkeypatch.setattr(extend, "next_fit", one_face_ahead(on_ring=False))
+    monkeypatch.setattr(extend, "STRATEGIES", (extend._next_step,))
+    seam = ring_arc(-1.0, STEP_M / RING_RADIUS_M / 2)
+    flags = np.full(len(seam.positions_m), int(PointFlag.ONE_FACE), np.uint8)
+    extension = Extension(None, JointKind.FILLET, replace(ExtendConfig(), max_extension_m=0.05))
+    steps, _ = extend.extend_end(extension, seam.positions_m, seam.torch_axes, flags)
+    assert len(steps) == 25

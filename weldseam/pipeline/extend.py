@@ -26,18 +26,24 @@ from scipy.spatial import cKDTree
 from weldseam.config import ExtendConfig
 from weldseam.geometry import arc_lengths, bend_corner, polyline_length, unit
 from weldseam.pipeline.bridge import GrooveTemplate, groove_template, part_ends_ahead
-from weldseam.pipeline.ends import END_BASELINE_M, TANGENT_BASELINE_M, end_curve
+from weldseam.pipeline.ends import END_BASELINE_M, TANGENT_BASELINE_M, ahead, end_curve
 from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.parallel import map_shared
-from weldseam.pipeline.section import FineSurface, SectionFit, section_frames
+from weldseam.pipeline.section import FineSurface, PointFlag, SectionFit, section_frames
 from weldseam.pipeline.holes import across_hole, hole_aim, hole_of
-from weldseam.pipeline.seek import Extension, next_fit
+from weldseam.pipeline.seek import Extension, next_fit, offsets
 from weldseam.pipeline.tacks import across_tack
 from weldseam.pipeline.turn import turned_run
 from weldseam.pipeline.trace import Hole, TracedSeam
 
 # The groove template a bridged section assumes: the median of this many latest fits.
 TEMPLATE_MEMORY = 6
+# A corner fitted with one face unseen lies at most this share of its arc from the last fit with
+# both faces seen off the curve fitted there. Past a standing pipe's silhouette the plate's
+# visible end (the shadow's edge) runs on along the line of sight, straight: it leaves a ring of
+# radius R by d^2 / 2R, 12.5 % of d at d = R / 4. The curve (a parabola, its bend clamped at 30 mm:
+# ends.MIN_BEND_RADIUS_M) stays within 8 % of d of a 50 mm ring for 34 mm, and of a 25 mm ring.
+ONE_FACE_DRIFT = 0.08
 
 
 @dataclass(frozen=True)
@@ -90,12 +96,13 @@ def extend_seam(seam: TracedSeam, surface: FineSurface, params: ExtendConfig) ->
     if seam.closed or len(seam.positions_m) < 2:
         return seam
     extension = Extension(surface, seam.joint, params)
-    start, start_stop = extend_end(extension, seam.positions_m[::-1], seam.torch_axes[::-1])
+    start, start_stop = extend_end(extension, seam.positions_m[::-1], seam.torch_axes[::-1], seam.point_flags[::-1])
     before = _fits(start)[::-1]
     end, end_stop = extend_end(
         extension,
         np.array([f.point_m for f in before] + list(seam.positions_m)),
         np.array([f.torch_axis for f in before] + list(seam.torch_axes)),
+        np.array([f.flags for f in before] + list(seam.point_flags), np.uint8),
     )
     return _extended(seam, start, start_stop, end, end_stop)
 
@@ -107,7 +114,8 @@ def _extension_job(surface: FineSurface, job) -> tuple[list[Step], Step | None] 
     if at_start is None:
         return extend_seam(seam, surface, params)
     order = slice(None, None, -1) if at_start else slice(None)
-    return extend_end(Extension(surface, seam.joint, params), seam.positions_m[order], seam.torch_axes[order])
+    return extend_end(Extension(surface, seam.joint, params), seam.positions_m[order], seam.torch_axes[order],
+                      seam.point_flags[order])  # fmt: skip
 
 
 def _fits(steps: list[Step]) -> list[SectionFit]:
@@ -147,20 +155,36 @@ def _extended(seam: TracedSeam, start: list[Step], start_stop, end: list[Step], 
 class SeamEnd:
     """An end being extended: its points, torch axes and which were bridged (travel order, the
     end last), where its current face begins (after a turn over an edge), the curve it is
-    predicted along, and the groove templates of its fits (a groove only)."""
+    predicted along, the groove templates of its fits (a groove only), and the curve at its last
+    fit with both faces seen: (index, direction, bend)."""
 
     positions: list
     axes: list
     bridged: list
     direction: np.ndarray
     bend: np.ndarray
+    step_m: float
     templates: list = field(default_factory=list)
     face_start: int = 0
+    last_full: tuple = ()
 
     @property
     def fitted(self) -> np.ndarray:
         """The fitted (not bridged) points on the current face."""
         return np.array(self.positions[self.face_start:])[~np.array(self.bridged[self.face_start:])]
+
+    def on_curve(self, point: np.ndarray) -> bool:
+        """Whether `point` (3,), reached from the last point, lies within max(half a step,
+        ONE_FACE_DRIFT x its arc) of the curve at the last fit with both faces seen, sideways of
+        the torch axis; True when the seam has no such fit."""
+        if not self.last_full:
+            return True
+        index, direction, bend = self.last_full
+        anchor = np.asarray(self.positions[index])
+        arc = polyline_length(np.array(self.positions[index:])) + float(np.linalg.norm(point - self.positions[-1]))
+        predicted, travel = ahead(anchor, direction, bend, arc)
+        _, sideways = offsets(point, predicted, travel, self.axes[-1])
+        return sideways <= max(0.5 * self.step_m, ONE_FACE_DRIFT * arc)
 
     def heading(self) -> tuple[np.ndarray, np.ndarray]:
         """(direction, bend) to predict the next step along: past bridged points along the curve
@@ -196,9 +220,12 @@ class SeamEnd:
         fitted = self.fitted
         if len(fitted) >= 3:
             self.direction, self.bend = end_curve(fitted)
+        last = step.fits[-1]
+        if not (last.bridged or last.flags & PointFlag.ONE_FACE):
+            self.last_full = (len(self.positions) - 1, self.direction, self.bend)
 
 
-def extend_end(extension: Extension, seam_positions, seam_axes) -> tuple[list[Step], Step | None]:
+def extend_end(extension: Extension, seam_positions, seam_axes, seam_flags=None) -> tuple[list[Step], Step | None]:
     """The steps that extend a seam (points and axes in travel order) beyond its last point
     (see the module), and the step that stopped it where it came within two steps of the seam
     away from this end (None if it stopped otherwise)."""
@@ -208,8 +235,9 @@ def extend_end(extension: Extension, seam_positions, seam_axes) -> tuple[list[St
     arc = arc_lengths(positions)
     elsewhere = positions[arc < arc[-1] - 2 * END_BASELINE_M]
     elsewhere_tree = cKDTree(elsewhere) if len(elsewhere) else None
-    end = SeamEnd(list(seam_positions), list(seam_axes), [False] * len(positions), *end_curve(positions),
-                  templates=_end_templates(extension, positions, np.array(seam_axes)))  # fmt: skip
+    end = SeamEnd(list(seam_positions), list(seam_axes), [False] * len(positions), *end_curve(positions), params.step_m,
+                  templates=_end_templates(extension, positions, np.array(seam_axes)),
+                  last_full=_last_full(positions, seam_flags))  # fmt: skip
     steps: list[Step] = []
     for _ in range(int(params.max_extension_m / params.step_m)):
         step = next((found for strategy in STRATEGIES if (found := strategy(extension, end)) is not None), STOP)
@@ -222,11 +250,26 @@ def extend_end(extension: Extension, seam_positions, seam_axes) -> tuple[list[St
     return steps, None
 
 
+def _last_full(positions: np.ndarray, flags: np.ndarray | None) -> tuple:
+    """(index, direction, bend) of a seam's last point fitted with both faces seen (`flags`: its
+    points' PointFlag bits, None: all were) and the curve of the seam up to it; () when there is
+    none (a T-joint seen from above all along: its one-face corners are the seam)."""
+    full = np.arange(len(positions)) if flags is None else np.flatnonzero((np.asarray(flags) & PointFlag.ONE_FACE) == 0)
+    if len(full) == 0 or full[-1] < 1:
+        return ()
+    return (int(full[-1]), *end_curve(positions[: full[-1] + 1]))
+
+
 def _next_step(extension: Extension, end: SeamEnd) -> Step | None:
-    """The next fit ahead along the predicted curve (seek.next_fit, bridged over dropouts)."""
+    """The next fit ahead along the predicted curve (seek.next_fit, bridged over dropouts); a
+    corner with one face unseen only near the curve of the last fit with both faces seen
+    (SeamEnd.on_curve): past a pipe's silhouette the end of the plate seen is a shadow's edge,
+    running off the pipe's foot along the line of sight."""
     direction, bend = end.heading()
     fit = next_fit(extension, end.positions[-1], end.axes[-1], direction, bend, end.template())
-    return None if fit is None else Step([fit])
+    if fit is None or (fit.flags & PointFlag.ONE_FACE and not end.on_curve(fit.point_m)):
+        return None
+    return Step([fit])
 
 
 def _turn_step(extension: Extension, end: SeamEnd) -> Step | None:
