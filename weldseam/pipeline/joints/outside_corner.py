@@ -15,6 +15,8 @@ edges on average.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from weldseam.config import JointsConfig
@@ -115,20 +117,29 @@ def fit(u: np.ndarray, w: np.ndarray, params: JointsConfig) -> ProfileFit | NoFi
         bottom = np.array([median(u[deep]), median(w[deep])])
         left_edge = _wall_edge(u, w, (a_left, b_left), left_edge, bottom[0], left_seen)
         right_edge = _wall_edge(u, w, (a_right, b_right), right_edge, bottom[0], right_seen)
-    left = np.array([left_edge, a_left + b_left * left_edge])
-    right = np.array([right_edge, a_right + b_right * right_edge])
+    geometry = JointGeometry(opening_m=0.0, depth_m=deepest, included_deg=float(roof), legs_m=(left_reach, right_reach))
+    return _on_bisector(((a_left, b_left), (a_right, b_right)), (left_edge, right_edge), bottom, geometry, sigma)
+
+
+def _on_bisector(faces, edges, bottom, geometry: JointGeometry, sigma: float) -> ProfileFit:
+    """The fit of faces ((a, b) of w = a + b u, left and right) whose V's top edges lie at u =
+    `edges` (left, right), with the V's bottom (u, w) or None: the torch axis is minus the
+    bisector of the faces' outward normals. The V is cut symmetrically about it: the seam lies on
+    it (the long faces place it well), as deep below the apex as the two edges on average. A
+    wall's shallowest points pass for its face, so one edge may fall up to a millimetre inside;
+    on the bisector that moves the seam only along the torch axis, by a third of it."""
+    (a_left, b_left), (a_right, b_right) = faces
+    left = np.array([edges[0], a_left + b_left * edges[0]])
+    right = np.array([edges[1], a_right + b_right * edges[1]])
     normal_left, normal_right = np.array([-b_left, 1.0]), np.array([-b_right, 1.0])  # outward
     axis = -unit(unit(normal_left) + unit(normal_right))
-    # The V is cut symmetrically about the faces' bisector: the seam lies on it (the long faces
-    # place it well), as deep below the apex as the two edges on average. A wall's shallowest
-    # points pass for its face, so one edge may fall up to a millimetre inside; on the bisector
-    # that moves the seam only along the torch axis, by a third of it.
+    apex_u = (a_right - a_left) / (b_left - b_right)
     apex = np.array([apex_u, a_left + b_left * apex_u])
     seam = apex + axis * float(((left - apex) @ axis + (right - apex) @ axis) / 2)
-    geometry = JointGeometry(opening_m=float(np.linalg.norm(right - left)), depth_m=deepest,
-                             included_deg=float(roof), legs_m=(left_reach, right_reach))
+    to_left, to_right = unit(np.array([-1.0, -b_left])), unit(np.array([1.0, b_right]))
     outline = (left + to_left, left, seam if bottom is None else bottom, right, right + to_right)
-    return ProfileFit(KIND, float(seam[0]), float(seam[1]), float(axis[0]), float(axis[1]), float(sigma), geometry,
+    return ProfileFit(KIND, float(seam[0]), float(seam[1]), float(axis[0]), float(axis[1]), float(sigma),
+                      replace(geometry, opening_m=float(np.linalg.norm(right - left))),
                       tuple((float(a), float(b)) for a, b in outline))  # fmt: skip
 
 
