@@ -211,3 +211,19 @@ def test_of_the_models_that_fit_the_closest_outline_wins_whatever_their_order(mo
         monkeypatch.setattr(joints, "MODELS", models)
         found = joints.fit_profile(u, w, PARAMS)
         assert found.kind == FILLET and found.residual_m < 0.0005
+
+
+def test_a_fit_whose_outline_lies_far_from_the_points_is_no_fit(monkeypatch, rng):
+    # A model that 'fits' a corner 6 mm off the section's one (a few points of something else):
+    # alone, it must not become the joint; the section says why.
+    import weldseam.pipeline.joints as joints
+
+    u, w = profile(lambda u: np.abs(u - 0.002), rng)
+
+    def fit(u, w, params):
+        outline = ((0.008 - 1.0, 1.0), (0.008, 0.0), (0.008 + 1.0, 1.0))
+        return ProfileFit(FILLET, 0.008, 0.0, 0.0, -1.0, 0.0, JointGeometry(), outline)
+
+    monkeypatch.setattr(joints, "MODELS", (SimpleNamespace(KIND=FILLET, CENTRED=False, SPECIALISES=None, fit=fit),))
+    found = joints.fit_profile(u, w, PARAMS)
+    assert isinstance(found, NoFit) and "outline lies" in found.reason

@@ -23,6 +23,9 @@ __all__ = ["MODELS", "min_length_m", "one_joint", "recentred", "JointGeometry", 
 
 MODELS = (v_groove, fillet, lap, square_butt, bevel, outside_corner)
 MIN_PROFILE_POINTS = 12
+# A fit whose outline lies farther than this from the section's points (median, the depth of the
+# shallowest groove that counts) explains nothing: what fitted is a few points of something else.
+MAX_OUTLINE_RESIDUAL_M = 0.0015
 # A special case's outline within this fraction of the general kind's residual explains the points
 # as well (noise decides between them): a single bevel whose bevel wall is seen is also a V-groove
 # with its square wall hidden, and the V-groove's outline follows the bevel within the noise.
@@ -51,7 +54,11 @@ def fit_profile(
             reasons.append(f"{model.KIND.value}: {found.reason}")
             continue
         reach = params.face_radius_m + found.half_opening_m
-        fits.append(replace(found, residual_m=outline_residual(u, w, found.outline, found.u, reach)))
+        residual = outline_residual(u, w, found.outline, found.u, reach)
+        if residual > MAX_OUTLINE_RESIDUAL_M:
+            reasons.append(f"{model.KIND.value}: its outline lies {residual * 1000:.1f} mm from the points")
+            continue
+        fits.append(replace(found, residual_m=residual))
     if not fits:
         return NoFit("; ".join(reasons))
     closest = min(fits, key=lambda fit: fit.residual_m)
