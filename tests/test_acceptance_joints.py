@@ -5,7 +5,9 @@ and loose bars, a camera anywhere in the cone that sees the seam, ripple, stereo
 The criteria of issue 22, each a test per family and seed: the right number of seams; mean
 position error <= 0.5 mm; >= 95 % of the seen seam within 2 mm of the path; mean torch-axis
 error <= 3 degrees. Known gaps are strict xfails: when a change closes one, its test fails
-until the mark is removed, so the list stays the truth about what the planner does.
+until the mark is removed, so the list stays the truth about what the planner does. Seeds 0-4;
+today 132 of the 180 criteria hold (lap, bevel, outside corner, square butt and tack welds
+mostly; pipe on plate, saddle and the shallow valley least).
 """
 
 import numpy as np
@@ -24,7 +26,30 @@ CRITERIA = {
     "coverage": lambda m: m["coverage"] >= 0.95,
     "axis": lambda m: m["mean_axis_error_deg"] <= 3.0,
 }
-KNOWN_GAPS: dict[tuple[str, int], set[str]] = {}
+KNOWN_GAPS: dict[tuple[str, int], set[str]] = {
+    ("lap", 0): {"position", "coverage"},
+    ("lap", 2): {"coverage"},
+    ("square_butt", 1): {"count", "position", "coverage", "axis"},
+    ("square_butt", 2): {"coverage"},
+    ("outside_corner", 4): {"position", "coverage"},
+    ("pipe_on_plate", 0): {"count", "position", "coverage"},
+    ("pipe_on_plate", 1): {"position"},
+    ("pipe_on_plate", 2): {"count", "position", "coverage"},
+    ("pipe_on_plate", 3): {"coverage"},
+    ("pipe_on_plate", 4): {"position"},
+    ("saddle", 0): {"coverage", "axis"},
+    ("saddle", 1): {"coverage", "axis"},
+    ("saddle", 2): {"coverage", "axis"},
+    ("saddle", 3): {"coverage"},
+    ("saddle", 4): {"position", "coverage", "axis"},
+    ("tacked", 2): {"position"},
+    ("clutter", 1): {"position", "coverage"},
+    ("clutter", 2): {"count", "position", "coverage", "axis"},
+    ("clutter", 4): {"count", "coverage"},
+    ("valley", 0): {"count", "position", "coverage", "axis"},
+    ("valley", 1): {"position", "coverage"},
+    ("valley", 4): {"count", "position", "coverage", "axis"},
+}
 _results: dict = {}
 
 
