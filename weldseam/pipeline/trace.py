@@ -16,7 +16,7 @@ from scipy.spatial import cKDTree
 
 from weldseam.config import TraceConfig
 from weldseam.geometry import polyline_length, unit
-from weldseam.pipeline.joints import JointKind
+from weldseam.pipeline.joints import JointKind, akin
 from weldseam.pipeline.order import Chain
 from weldseam.pipeline.section import FineSurface, SectionFit, section_frames
 
@@ -73,11 +73,13 @@ def trace_chain(
     params: TraceConfig,
 ) -> list[TracedSeam]:
     """Seams found along one chain (none if the chain is not a seam): a section at every chain
-    point. The chain's probes are sections at some of its points in the same frames, fitted as
-    these are: they are not fitted again."""
+    point, seeking the joints its probes found (and their kin, joints.akin). The chain's probes are
+    sections at some of its points in the same frames, fitted as these are: they are not fitted
+    again."""
     travel, axes, lateral = section_frames(chain.points, approx_axes, chain.closed)
     rest = np.array([k for k in range(len(chain.points)) if k not in probe_fits], dtype=int)
-    fitted = iter(surface.fit_many(chain.points[rest], travel[rest], axes[rest], lateral[rest]))
+    sought = akin({fit.kind for fit in probe_fits.values() if fit.kind is not None}) or None  # none: any
+    fitted = iter(surface.fit_many(chain.points[rest], travel[rest], axes[rest], lateral[rest], sought))
     fits = [probe_fits[k] if k in probe_fits else next(fitted) for k in range(len(chain.points))]
     kinds = Counter(fit.kind for fit in fits if fit.kind is not None)
     if not kinds:

@@ -15,11 +15,11 @@ from dataclasses import replace
 
 import numpy as np
 
-from weldseam.pipeline.joints import bevel, fillet, lap, outside_corner, square_butt, v_groove
 from weldseam.config import JointsConfig
+from weldseam.pipeline.joints import bevel, fillet, lap, outside_corner, square_butt, v_groove
 from weldseam.pipeline.joints.base import JointGeometry, JointKind, NoFit, ProfileFit, outline_residual
 
-__all__ = ["MODELS", "min_length_m", "one_joint", "recentred", "JointGeometry", "JointKind", "NoFit", "ProfileFit", "fit_profile"]
+__all__ = ["MODELS", "JointGeometry", "JointKind", "NoFit", "ProfileFit", "akin", "fit_profile", "min_length_m", "one_joint", "recentred"]
 
 MODELS = (v_groove, fillet, lap, square_butt, bevel, outside_corner)
 MIN_PROFILE_POINTS = 12
@@ -82,6 +82,15 @@ def one_joint(kind: JointKind, other: JointKind) -> bool:
 def _specialises(kind: JointKind, general: JointKind) -> bool:
     """Whether `kind`'s model is a special case of `general` (its SPECIALISES)."""
     return next(model.SPECIALISES for model in MODELS if model.KIND == kind) == general
+
+
+def akin(kinds: Collection[JointKind]) -> frozenset[JointKind]:
+    """`kinds` with the kinds each is a special case of, or that are special cases of it (a bevel
+    is a V-groove with one square wall): what a section of one of them may turn out to be."""
+    return frozenset(
+        model.KIND for model in MODELS
+        if model.KIND in kinds or model.SPECIALISES in kinds or any(_specialises(kind, model.KIND) for kind in kinds)
+    )
 
 
 def min_length_m(kind: JointKind) -> float:
