@@ -34,3 +34,4 @@ bench: setup
 	$(BIN)/python benchmarks/accuracy.py
 	$(BIN)/python benchmarks/smoothing.py
 	$(BIN)/python benchmarks/merge.py
+	$(BIN)/python benchmarks/foreign.py
