@@ -151,3 +151,23 @@ def test_a_glob_takes_scans_and_leaves_their_sidecars(tmp_path):
     touch(tmp_path / "part.ply")
     touch(tmp_path / "part.pose.json")
     assert find_scans([str(tmp_path / "*")]) == [tmp_path / "part.ply"]
+
+
+def test_an_output_whose_result_never_arrived_is_removed_so_the_summary_lists_every_output(tmp_path):
+    # A worker that wrote its output just as a stop signal ended the run: its result is lost, so
+    # its file goes too (a resume plans it again); an older file, and a reported one, stay.
+    import os
+    import time
+    from types import SimpleNamespace
+
+    from weldseam.batch import _drop_unreported
+
+    reported, unreported, older = (tmp_path / f"{name}.json" for name in ("reported", "unreported", "older"))
+    older.write_text("{}")
+    os.utime(older, (time.time() - 60, time.time() - 60))
+    started = time.time() - 1
+    reported.write_text("{}")
+    unreported.write_text("{}")
+    jobs = [SimpleNamespace(output=str(path)) for path in (reported, unreported, older)]
+    _drop_unreported(jobs, [SimpleNamespace(output=str(reported))], started)
+    assert reported.exists() and not unreported.exists() and older.exists()

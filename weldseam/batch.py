@@ -321,6 +321,7 @@ def run_batch(
     for result in results:
         on_result(result)
     pending = [job for job in jobs if job.output not in current]
+    started = time.time()
     try:
         stream = run_dask(pending, scheduler) if scheduler else run_local(pending, workers, stop=stop)
         with closing(stream):  # an error here stops the workers now, not when the generator is collected
@@ -328,6 +329,18 @@ def run_batch(
                 results.append(result)
                 on_result(result)
     finally:
+        _drop_unreported(pending, results, started)
         write_summary(results, out_dir)
         save_state(jobs, results, out_dir)
     return results
+
+
+def _drop_unreported(pending: list[BatchJob], results: list[JobResult], started: float) -> None:
+    """Remove the outputs this run wrote whose result never arrived (a worker that finished just as
+    a stop signal ended the run): the summary lists every output, and only those; a resume plans
+    those scans again."""
+    reported = {result.output for result in results}
+    for job in pending:
+        path = Path(job.output)
+        if job.output not in reported and path.exists() and path.stat().st_mtime >= started:
+            path.unlink()
