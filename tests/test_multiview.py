@@ -10,10 +10,9 @@ from functools import partial
 
 import numpy as np
 import pytest
-from PIL import Image
 
 from tests.test_cli import weldseam
-from weldseam.io.depth import write_intrinsics
+from tests.test_multiframe import manifest_frames
 from weldseam.io.paths import read_paths
 from weldseam.synthetic.metrics import evaluate
 from weldseam.synthetic.multiview import box_groove_views, pipe_ring_views, pose_error, render_views, seen_by_any
@@ -35,13 +34,7 @@ def planned(request, tmp_path_factory):
     scans = render_views(scene, cameras, rng)
     poses = [s.T_base_camera @ (pose_error(rng) if with_error and k else np.eye(4)) for k, s in enumerate(scans)]
     folder = tmp_path_factory.mktemp(name)
-    frames = []
-    for index, (scan, pose) in enumerate(zip(scans, poses)):
-        Image.fromarray(scan.depth).save(folder / f"f{index}.png")
-        frames.append({"scan": f"f{index}.png", "intrinsics": "d415.json", "T_base_camera": pose.tolist()})
-    write_intrinsics(folder / "d415.json", scans[0].intrinsics)
-    (folder / "frames.json").write_text(json.dumps({"frames": frames}))
-    result = weldseam("plan", "--frames", folder / "frames.json", "-o", folder / "path.json")
+    result = weldseam("plan", *manifest_frames(folder, scans, poses), "-o", folder / "path.json")
     assert result.returncode == 0, result.stderr.decode()
     paths = read_paths(folder / "path.json")
     record = json.loads((folder / "path.json").read_text())

@@ -21,7 +21,7 @@ import numpy as np
 from weldseam.config import JointsConfig
 from weldseam.pipeline.joints.base import JointGeometry, JointKind, NoFit, ProfileFit
 from weldseam.pipeline.joints.robust import line, median, noise, upper_decile
-from weldseam.pipeline.joints.v_groove import surface_line
+from weldseam.pipeline.joints.v_groove import largest_run, surface_line
 
 KIND = JointKind.BEVEL
 # The surface line is fitted to the outer halves of the window: the groove must sit in its middle.
@@ -48,8 +48,6 @@ MIN_SQUARE_DEPTH_M = 0.001
 MAX_ROOT_GAP_M = 0.0025
 # A wall's top edge lies within this of where the surface ends on its side.
 EDGE_TOLERANCE_M = 0.0015
-# Points of a depression closer than this along the surface belong to one groove.
-GROOVE_GAP_M = 0.004
 # A surface's points with a wider gap between them are not one stretch of surface.
 SURFACE_GAP_M = 0.002
 
@@ -64,7 +62,7 @@ def fit(u: np.ndarray, w: np.ndarray, params: JointsConfig) -> ProfileFit | NoFi
     along, normal = np.array([1.0, slope]) / norm, np.array([-slope, 1.0]) / norm
     x = u * along[0] + (w - intercept) * along[1]
     depth = -(u * normal[0] + (w - intercept) * normal[1])
-    groove = _largest_run(x, np.flatnonzero(depth > depth_limit))
+    groove = largest_run(x, np.flatnonzero(depth > depth_limit))
     if len(groove) < MIN_WALL_POINTS:
         return NoFit("no depression below the surface")
     ends = []
@@ -166,11 +164,3 @@ def _surface_end(x: np.ndarray, toward: int) -> tuple[float, float]:
     spacing = float(np.median(np.abs(np.diff(last)))) if len(last) > 1 else 0.0
     return float(last[0]), float(last[0] + toward * spacing / 2)
 
-
-def _largest_run(x: np.ndarray, deep: np.ndarray) -> np.ndarray:
-    """The largest run of deep points (sorted by x) with gaps under GROOVE_GAP_M between them."""
-    if len(deep) == 0:
-        return deep
-    deep = deep[np.argsort(x[deep], kind="stable")]
-    runs = np.split(deep, np.flatnonzero(np.diff(x[deep]) > GROOVE_GAP_M) + 1)
-    return max(runs, key=len)

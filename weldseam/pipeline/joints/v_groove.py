@@ -45,7 +45,7 @@ def fit(u: np.ndarray, w: np.ndarray, params: JointsConfig) -> ProfileFit | NoFi
     deep = np.flatnonzero(depth > depth_limit)
     if len(deep) < 4:
         return NoFit("no depression below the surface")
-    groove = _largest_run(u, deep)
+    groove = largest_run(u, deep)
     u_start, u_end = u[groove[0]], u[groove[-1]]
     left_surface = on_surface & (u < u_start)
     right_surface = on_surface & (u > u_end)
@@ -95,9 +95,10 @@ def surface_line(u: np.ndarray, w: np.ndarray, min_depth_m: float):
     return intercept, slope, on_surface, residual, depth_limit, sigma
 
 
-def _largest_run(u: np.ndarray, deep: np.ndarray) -> np.ndarray:
-    """The largest run of deep points with gaps under GROOVE_GAP_M between them (the first of
-    the largest)."""
+def largest_run(u: np.ndarray, deep: np.ndarray) -> np.ndarray:
+    """The largest run of the `deep` points (indices), taken in order of u, with gaps under
+    GROOVE_GAP_M between them (the first of the largest)."""
+    deep = deep[np.argsort(u[deep], kind="stable")]
     breaks = np.flatnonzero(np.diff(u[deep]) > GROOVE_GAP_M) + 1
     if not len(breaks):
         return deep
