@@ -82,9 +82,10 @@ def formed_with(seam: TracedSeam, surface, plane, tolerance_m: float) -> bool:
     for k, members in zip(picks, surface.tree.query_ball_point(positions[picks], SIDE_FAR_M)):
         t = travel[k] / (np.linalg.norm(travel[k]) or 1.0)
         lateral = np.cross(t, axes[k])
-        offsets = surface.points.take(members, axis=0) - positions[k]
+        near = surface.points.take(members, axis=0)
+        offsets = near - positions[k]
         across, along = offsets @ lateral, offsets @ t
-        on_plane = np.abs((surface.points.take(members, axis=0) - centre) @ normal) <= tolerance_m / 2
+        on_plane = np.abs((near - centre) @ normal) <= tolerance_m / 2
         for side in (-1.0, 1.0):
             beside = (np.abs(along) <= SIDE_SLAB_M) & (side * across >= SIDE_NEAR_M)
             if np.count_nonzero(beside) >= 10 and np.mean(on_plane[beside]) >= SIDE_SHARE:
