@@ -8,8 +8,9 @@ Sets: single (each case's cloud.ply with its camera origin), depth (the same cas
 intrinsics and camera pose), joints (further joints, cloud), hires (1944x1200 depth), multiview
 (several depth frames through --frames) and real (real scans against their loose expected lines).
 Pass (the scorer's): seam count right, mean position error <= 1.0 mm, >= 95 % of the seam within
-2 mm of a pose, mean torch-axis error <= 5 deg; negative cases pass with no seam. Without the
-folder it says so and exits 0: nothing here is ours to ship.
+2 mm of a pose, mean torch-axis error <= 5 deg; negative cases pass with no seam. Each set also
+shows its pooled mean position error: the mean of the per-case mean errors over every case that
+gave a path (passed or not). Without the folder it says so and exits 0: nothing here is ours to ship.
 """
 
 from __future__ import annotations
@@ -49,6 +50,12 @@ def run_set(name: str, foreign: Path, work: Path) -> dict:
     return json.loads(results.read_text())
 
 
+def pooled_error_mm(cases: list[dict]) -> float | None:
+    """Mean position error (mm) pooled over the cases that gave a path: the mean of their means."""
+    errors = [case["err_mean_mm"] for case in cases if case.get("err_mean_mm") is not None]
+    return sum(errors) / len(errors) if errors else None
+
+
 def run_real(foreign: Path) -> dict:
     """check_real.py's verdict per real scan: {scan: verdict line}."""
     done = subprocess.run(
@@ -78,8 +85,9 @@ def main() -> int:
             print(f"{name} ...", file=sys.stderr, flush=True)
             report[name] = run_real(args.foreign) if name == "real" else run_set(name, args.foreign, Path(work))
     if args.json:
-        print(json.dumps({name: value if name == "real" else value["totals"] | {"cases": [
-            {key: case.get(key) for key in ("case", "family", "passed", "reasons")} for case in value["cases"]]}
+        print(json.dumps({name: value if name == "real" else value["totals"] | {
+            "pooled_error_mm": pooled_error_mm(value["cases"]), "cases": [
+            {key: case.get(key) for key in ("case", "family", "passed", "reasons", "err_mean_mm")} for case in value["cases"]]}
             for name, value in report.items()}, indent=1))
         return 0
     for name, value in report.items():
@@ -89,7 +97,10 @@ def main() -> int:
             continue
         totals = value["totals"]
         families = ", ".join(f"{family} {d['passed']}/{d['n']}" for family, d in sorted(totals["by_family"].items()))
-        print(f"{name}: {totals['passed']}/{totals['n']} pass ({families}); mean {totals['mean_wall_s']:.1f} s a case")
+        error_mm = pooled_error_mm(value["cases"])
+        error = "no path" if error_mm is None else f"mean error {error_mm:.2f} mm"
+        print(f"{name}: {totals['passed']}/{totals['n']} pass ({families}); {error}; "
+              f"mean {totals['mean_wall_s']:.1f} s a case")
         for case in value["cases"]:
             if not case["passed"]:
                 print(f"  {case['case']}: {'; '.join(case['reasons'])}")
