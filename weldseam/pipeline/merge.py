@@ -33,21 +33,15 @@ from scipy.spatial import cKDTree
 from weldseam.config import MergeConfig
 from weldseam.geometry import transform_points
 from weldseam.pipeline import register
-from weldseam.pipeline.neighbours import COVARIANCE_ENTRIES, extreme_eigenvectors, radius_pairs
+from weldseam.pipeline.neighbours import radius_pairs
+from weldseam.pipeline.patches import Patches, frame_patches, voxel_keys
 from weldseam.pipeline.register import Registration, Surface
 
-# A patch has at least this many occupied voxels of the 27 around it (fewer are stray points);
-# a surface patch, at least this many points in each on average (sparser: flying pixels).
-MIN_PATCH_VOXELS = 6
-MIN_POINTS_PER_VOXEL = 2.0
-# A smooth patch's normal is within this of each neighbour patch's (a 30 mm radius turns 8 deg in 4 mm).
-MAX_PATCH_TURN_DEG = 15.0
 PATCHES_PER_DIRECTION = 400  # ICP patches per facing direction (_direction_cells) and patch size
 FAR_SIDE_M = 0.015  # two frames seeing opposite faces of a wall thinner than this: one face is kept
 MAX_WALL_ANGLE_DEG = 60.0  # a wall's two faces are within this of facing opposite ways
 CONVEXITY_MARGIN_PER_M = 5.0  # curvatures closer than this (a 200 mm radius) are alike
-# Key differences (see _voxel_keys) to the 27 voxels around one, itself included.
-NEIGHBOUR_KEYS = np.array([(i << 42) + (j << 21) + k for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (-1, 0, 1)])
+
 
 
 class MergedFrames(NamedTuple):
@@ -69,25 +63,6 @@ class MergedFrames(NamedTuple):
     converged: bool
     undetermined: np.ndarray
     far_side: np.ndarray
-
-
-class Patches(NamedTuple):
-    """One frame's surface patches (M of them): group (N,) patch of each point; point (M, 3)
-    voxel centroid projected on the patch plane; plane (M, 3) a point of that plane (the
-    mean of the 3 x 3 x 3 voxels around); normal (M, 3) unit, toward the camera; count (M,)
-    points in the voxel; veil (M,) seen more edge-on than the incidence limit; surface (M,)
-    neither a veil nor stray points; smooth (M,) a surface patch whose normal turns little
-    to its neighbours'; neighbours (M, 27) the patches around each (-1: none)."""
-
-    group: np.ndarray
-    point: np.ndarray
-    plane: np.ndarray
-    normal: np.ndarray
-    count: np.ndarray
-    veil: np.ndarray
-    surface: np.ndarray
-    smooth: np.ndarray
-    neighbours: np.ndarray
 
 
 def merge_frames(frames: Sequence[np.ndarray], camera_origins_m: np.ndarray, params: MergeConfig) -> MergedFrames:
@@ -114,7 +89,7 @@ def merge_frames(frames: Sequence[np.ndarray], camera_origins_m: np.ndarray, par
         cloud = np.asarray(cloud, dtype=np.float64)
         finite = np.isfinite(cloud).all(axis=1)
         cloud = cloud if finite.all() else cloud[finite]
-        found = _patches(cloud, origin, icp_voxel_m, max_incidence_deg)
+        found = frame_patches(cloud, origin, icp_voxel_m, max_incidence_deg)
         seen = ~found.veil[found.group]
         clouds.append(cloud[seen])
         patches.append(found._replace(group=found.group[seen]))
@@ -145,8 +120,8 @@ def merge_warnings(merged: MergedFrames, sources: Sequence[str], *, min_overlap:
     if not refine or len(sources) < 2:
         return []
     if not merged.converged:
-        return [f"{sources[0]} and the other frames: the poses did not settle under ICP in {register.MAX_ITERATIONS} steps "
-                f"(moving less than {register.CONVERGED_M * 1000:.2f} mm): every frame's pose is used as given"]
+        return [(f"{sources[0]} and the other frames: the poses did not settle under ICP in {register.MAX_ITERATIONS} "
+                 f"steps (moving less than {register.CONVERGED_M * 1000:.2f} mm): every frame's pose is used as given")]
     warnings = []
     for name, overlap, refined, open_dof in zip(sources[1:], merged.overlap[1:], merged.refined[1:],
                                                 merged.undetermined[1:]):
@@ -158,69 +133,6 @@ def merge_warnings(merged: MergedFrames, sources: Sequence[str], *, min_overlap:
                             f"direction{'s' if open_dof > 1 else ''} (a slide along a prism or a turn about an axis of "
                             "symmetry): along them its pose is used as given")
     return warnings
-
-
-def _patches(cloud: np.ndarray, origin: np.ndarray, voxel_m: float, max_incidence_deg: float) -> Patches:
-    """The `voxel_m` patches of `cloud` (N, 3) seen from `origin` (3,). Each patch's plane is
-    fitted to the points of the 3 x 3 x 3 voxels around it (covariance from summed moments):
-    voxel centroids alone lie off the plane where noise splits a surface between two layers
-    of voxels, and would pull ICP by a fraction of the noise."""
-    if len(cloud) == 0:
-        empty = np.zeros((0, 3))
-        none = np.zeros(0, dtype=bool)
-        return Patches(np.zeros(0, dtype=np.intp), empty, empty, empty, np.zeros(0), none, none, none,
-                       np.zeros((0, len(NEIGHBOUR_KEYS)), dtype=np.intp))
-    corner = cloud.min(axis=0) - voxel_m  # every voxel has its neighbours' cell indices >= 0
-    keys, group, counts = np.unique(_voxel_keys(cloud, corner, voxel_m), return_inverse=True, return_counts=True)
-    group = group.ravel()
-    centre = cloud.mean(axis=0)
-    x, y, z = (cloud - centre).T
-    moments = np.column_stack([counts] + [
-        np.bincount(group, weights=v, minlength=len(keys)) for v in (x, y, z, x * x, y * y, z * z, x * y, x * z, y * z)
-    ])
-    # Row -1 of the padded moments is zero: a missing neighbour adds nothing.
-    padded = np.vstack([moments, np.zeros((1, moments.shape[1]))])
-    neighbours = _neighbour_voxels(keys)
-    block = np.zeros_like(moments)
-    for index in neighbours.T:
-        block += padded[index]
-    mean = block[:, 1:4] / block[:, :1]
-    first, second = np.array(COVARIANCE_ENTRIES).T
-    covariance = block[:, 4:] / block[:, :1] - mean[:, first] * mean[:, second]
-    normal = extreme_eigenvectors(covariance, largest=False)
-    plane = mean + centre
-    centroid = moments[:, 1:4] / moments[:, :1] + centre
-    point = centroid - normal * np.einsum("ij,ij->i", normal, centroid - plane)[:, None]
-    rays = origin - point
-    facing = np.einsum("ij,ij->i", normal, rays)
-    normal = np.where(facing[:, None] < 0, -normal, normal)
-    occupied = (neighbours >= 0).sum(axis=1)
-    patch = occupied >= MIN_PATCH_VOXELS
-    veil = patch & (np.abs(facing) < np.cos(np.radians(max_incidence_deg)) * np.linalg.norm(rays, axis=1))
-    surface = patch & ~veil & (block[:, 0] >= MIN_POINTS_PER_VOXEL * occupied)
-    smooth = surface.copy()
-    rows = np.flatnonzero(surface)
-    turn = np.einsum("ij,ikj->ik", normal[rows], np.vstack([normal, normal[:1]])[neighbours[rows]])
-    smooth[rows] = np.all((turn >= np.cos(np.radians(MAX_PATCH_TURN_DEG))) | (neighbours[rows] < 0), axis=1)
-    return Patches(group, point, plane, normal, counts.astype(np.float64), veil, surface, smooth, neighbours)
-
-
-def _neighbour_voxels(keys: np.ndarray) -> np.ndarray:
-    """(V, 27) index into the sorted unique voxel keys `keys` (V,) of the voxels around each
-    (NEIGHBOUR_KEYS order), -1 where there is none. One search per column of 3 voxels along
-    z: in sorted keys, z - 1 and z + 1 sit right before and after the key of z."""
-    found = np.empty((len(keys), len(NEIGHBOUR_KEYS)), dtype=np.intp)
-    padded = np.r_[keys, -1]  # a position past the end reads a key that is never wanted
-    for column in range(0, len(NEIGHBOUR_KEYS), 3):
-        middle = keys + NEIGHBOUR_KEYS[column + 1]
-        at = np.searchsorted(keys, middle)
-        here = padded[at] == middle
-        below = at - 1
-        found[:, column] = np.where((below >= 0) & (padded[below] == middle - 1), below, -1)
-        found[:, column + 1] = np.where(here, at, -1)
-        above = at + here
-        found[:, column + 2] = np.where(padded[above] == middle + 1, above, -1)
-    return found
 
 
 def _convexity(patches: Patches, rows: np.ndarray) -> np.ndarray:
@@ -258,7 +170,7 @@ def _icp_surface(cloud: np.ndarray, patches: Patches, origin: np.ndarray, voxel_
     radii: too sharp for them), the smooth patches of half that size: a groove's flanks, a
     few millimetres wide, are what fixes a seam's cross direction between views."""
     bent = ~patches.smooth[patches.group]
-    fine = _patches(cloud[bent], origin, voxel_m / 2, max_incidence_deg)
+    fine = frame_patches(cloud[bent], origin, voxel_m / 2, max_incidence_deg)
     levels = [(patches, patches.smooth, voxel_m), (fine, fine.smooth, voxel_m / 2)]
     picked = [(found, np.flatnonzero(smooth)[_balanced(found.normal[smooth], PATCHES_PER_DIRECTION)], size)
               for found, smooth, size in levels]
@@ -357,7 +269,7 @@ def _densest_frame_per_voxel(clouds: list[np.ndarray], voxel_m: float) -> list[n
         return [np.zeros(len(cloud), dtype=bool) for cloud in clouds]
     corner = np.min([cloud.min(axis=0) for cloud in clouds if len(cloud)], axis=0)
     groups = [  # each cloud's own voxels first: sorting N_k keys is cheaper than sorting all at once
-        np.unique(_voxel_keys(cloud, corner, voxel_m), return_inverse=True, return_counts=True) for cloud in clouds
+        np.unique(voxel_keys(cloud, corner, voxel_m), return_inverse=True, return_counts=True) for cloud in clouds
     ]
     voxel = np.concatenate([g[0] for g in groups])
     size = np.concatenate([g[2] for g in groups])
@@ -368,10 +280,3 @@ def _densest_frame_per_voxel(clouds: list[np.ndarray], voxel_m: float) -> list[n
     winner[order[first]] = True
     offsets = np.r_[0, np.cumsum([len(g[0]) for g in groups])]
     return [winner[offsets[k] + g[1].ravel()] for k, g in enumerate(groups)]
-
-
-def _voxel_keys(points: np.ndarray, corner: np.ndarray, voxel_m: float) -> np.ndarray:
-    """(N,) int64 key of the `voxel_m` voxel of each point (N, 3) of a grid anchored at `corner`
-    (3,), no point below it: x, y, z cell indices below 2^21 each (8.4 km at 4 mm)."""
-    cells = ((points - corner) * (1.0 / voxel_m)).astype(np.int64)  # truncation is floor here
-    return (cells[:, 0] << 42) | (cells[:, 1] << 21) | cells[:, 2]
