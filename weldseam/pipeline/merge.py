@@ -34,6 +34,7 @@ from weldseam.config import MergeConfig
 from weldseam.geometry import transform_points
 from weldseam.pipeline import register
 from weldseam.pipeline.neighbours import radius_pairs
+from weldseam.pipeline.outline import outline_edges
 from weldseam.pipeline.patches import Patches, frame_patches, voxel_keys
 from weldseam.pipeline.register import Registration, Surface
 
@@ -98,6 +99,9 @@ def merge_frames(frames: Sequence[np.ndarray], camera_origins_m: np.ndarray, par
         surfaces = [_icp_surface(cloud, patch, origin, icp_voxel_m, max_incidence_deg)
                     for cloud, patch, origin in zip(clouds, patches, origins)]
         registration = register.register(surfaces, params.icp_max_distance_m, 2.0 * icp_voxel_m, params.min_overlap)
+        if registration.undetermined.any():
+            edges = [outline_edges(patch, cloud, origin, icp_voxel_m) for patch, cloud, origin in zip(patches, clouds, origins)]
+            registration = register.register_open(registration, edges, params.icp_max_distance_m, 2.0 * icp_voxel_m)
     else:
         registration = Registration(np.tile(np.eye(4), (count, 1, 1)), np.ones(count), np.zeros(count, dtype=bool),
                                     True, np.zeros(count, dtype=int))

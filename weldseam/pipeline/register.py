@@ -25,6 +25,7 @@ MIN_FACING_AREA_M2 = 5e-5
 NORMAL_NOISE = np.sin(np.radians(10.0))
 CONVERGED_M = 3e-5  # an ICP step moving every paired point by less than this, at the finest reach, ends it
 MAX_ITERATIONS = 60
+EDGE_ACCURACY_M = 0.002  # edges place a frame along what planes leave open to about this (pixel footprints, mixed pixels, rounded corners)
 
 
 class Surface(NamedTuple):
@@ -38,14 +39,36 @@ class Surface(NamedTuple):
     area_m2: np.ndarray
 
 
+class OpenMotions(NamedTuple):
+    """The joint motions the pairs leave open: basis (6F, D) directions in the step's
+    parameters (per free frame: rotation vector times lever, translation), about `centre` (3,)
+    at `lever` (m); an empty basis when every direction is fixed."""
+
+    basis: np.ndarray
+    centre: np.ndarray
+    lever: float
+
+
 class Registration(NamedTuple):
-    """corrections (K, 4, 4), overlap (K,), refined (K,), converged, undetermined (K,): as in MergedFrames."""
+    """corrections (K, 4, 4), overlap (K,), refined (K,), converged, undetermined (K,): as in
+    MergedFrames; open_motions: what the pairs left open (None when nothing moved)."""
 
     corrections: np.ndarray
     overlap: np.ndarray
     refined: np.ndarray
     converged: bool
     undetermined: np.ndarray
+    open_motions: OpenMotions | None = None
+
+
+class _Step(NamedTuple):
+    """One Gauss-Newton step: motions (F,) (4, 4), radius (m, the farthest paired point from
+    the centre of rotation), open_dof (F,) how many open directions move each frame, open_motions."""
+
+    motions: list
+    radius_m: float
+    open_dof: np.ndarray
+    open_motions: OpenMotions
 
 
 class _Pairs(NamedTuple):
@@ -74,31 +97,73 @@ def register(surfaces: list[Surface], reach_m: float, fine_m: float, min_overlap
     free = np.flatnonzero(taking[1:]) + 1
     if len(free) == 0:
         return Registration(identity, overlap, taking & False, True, np.zeros(count, dtype=int))
-    corrections = identity.copy()
-    reach, converged = reach_m, False
-    undetermined = np.zeros(count, dtype=int)
-    for _ in range(MAX_ITERATIONS):
-        pairs = _pair(sources, targets, trees, corrections, taking, reach)
-        motions, lever_m, open_dof = _joint_step(pairs, free, reach)
-        if motions is None:
-            break
-        for k, motion in zip(free, motions):
-            corrections[k] = motion @ corrections[k]
-        step_m = max(np.linalg.norm(m[:3, :3] - np.eye(3), 2) * lever_m + np.linalg.norm(m[:3, 3]) for m in motions)
-        undetermined[free] = open_dof
-        if reach > fine_m:
-            if step_m < 0.1 * reach:
-                reach = max(fine_m, reach / 2)
-        elif step_m < CONVERGED_M:
-            converged = True
-            break
-    if not converged:
+    settled = _settle(sources, targets, trees, identity, taking, free, (reach_m, fine_m), None)
+    if settled is None:
         return Registration(identity, overlap, np.zeros(count, dtype=bool), False, np.zeros(count, dtype=int))
+    corrections, reach, last = settled
     final = _overlap(_pair(sources, targets, trees, corrections, taking, reach), sources)
     overlap[free] = final[free]
     refined = np.zeros(count, dtype=bool)
     refined[free] = True
-    return Registration(corrections, overlap, refined, True, undetermined)
+    undetermined = np.zeros(count, dtype=int)
+    undetermined[free] = last.open_dof
+    return Registration(corrections, overlap, refined, True, undetermined, last.open_motions)
+
+
+def register_open(registration: Registration, edges: list[Surface], reach_m: float, fine_m: float) -> Registration:
+    """Move the refined frames along the directions `registration` left open only, to align
+    their `edges` (outline.outline_edges: each sample's normal is its face's outward direction
+    across the edge) with every other frame's; directions the edges do not fix either stay as
+    given. A frame the edges move by less than EDGE_ACCURACY_M keeps its pose: that is within
+    where an edge can be placed (a pixel's footprint, a rounded corner). A registration whose
+    edges do not settle is returned unchanged."""
+    open_motions = registration.open_motions
+    if open_motions is None or open_motions.basis.shape[1] == 0:
+        return registration
+    free = np.flatnonzero(registration.refined)
+    taking = registration.refined.copy()
+    taking[0] = True
+    targets = [(e.point, e.plane, e.normal) for e in edges]
+    sources = [(e.point, e.normal, e.area_m2) for e in edges]
+    trees = [cKDTree(point, balanced_tree=False) if len(point) else None for point, _, _ in targets]
+    if any(tree is None for tree, take in zip(trees, taking) if take):
+        return registration
+    settled = _settle(sources, targets, trees, registration.corrections, taking, free, (reach_m, fine_m), open_motions)
+    if settled is None:
+        return registration
+    corrections, _, last = settled
+    for k in free:
+        moved = transform_points(corrections[k], edges[k].point) - transform_points(registration.corrections[k], edges[k].point)
+        if np.linalg.norm(moved, axis=1).max(initial=0.0) < EDGE_ACCURACY_M:
+            corrections[k] = registration.corrections[k]
+    undetermined = registration.undetermined.copy()
+    undetermined[free] = last.open_dof
+    return registration._replace(corrections=corrections, undetermined=undetermined, open_motions=last.open_motions)
+
+
+def _settle(sources, targets, trees, start: np.ndarray, taking, free, reaches: tuple, open_motions):
+    """Gauss-Newton steps of the `free` frames from corrections `start` (within `open_motions`
+    when given) at a reach that halves from reaches[0] to reaches[1], until a step at the finest
+    reach moves every paired point by less than CONVERGED_M: (corrections, reach, last _Step),
+    None when it does not settle in MAX_ITERATIONS."""
+    corrections = start.copy()
+    reach, fine_m = reaches
+    last = None
+    for _ in range(MAX_ITERATIONS):
+        step = _joint_step(_pair(sources, targets, trees, corrections, taking, reach), free, reach, open_motions)
+        if step is None:
+            break
+        last = step
+        for k, motion in zip(free, step.motions):
+            corrections[k] = motion @ corrections[k]
+        step_m = max(np.linalg.norm(m[:3, :3] - np.eye(3), 2) * step.radius_m + np.linalg.norm(m[:3, 3])
+                     for m in step.motions)
+        if reach > fine_m:
+            if step_m < 0.1 * reach:
+                reach = max(fine_m, reach / 2)
+        elif step_m < CONVERGED_M:
+            return corrections, reach, last
+    return None
 
 
 def _pair(sources, targets, trees, corrections, taking, reach_m) -> list[_Pairs]:
@@ -135,23 +200,24 @@ def _overlap(pairs: list[_Pairs], sources) -> np.ndarray:
     return np.array([found.mean() if len(found) else 0.0 for found in paired])
 
 
-def _joint_step(pairs: list[_Pairs], free: np.ndarray, reach_m: float):
-    """One Gauss-Newton step of all `free` frames' motions: (F,) (4, 4) motions, the lever
-    (m, the farthest paired point from the centre of rotation) and (F,) in how many of the
-    directions the pairs leave open each frame moves; None when nothing is paired."""
+def _joint_step(pairs: list[_Pairs], free: np.ndarray, reach_m: float, open_motions: OpenMotions | None):
+    """One Gauss-Newton step of all `free` frames' motions (_Step), within `open_motions` when
+    given (its centre and lever then parametrise the step); None when nothing is paired."""
     residual = np.concatenate([p.residuals for p in pairs]) if pairs else np.zeros(0)
     if len(residual) < 6:
-        return None, 0.0, None
-    sigma = 1.4826 * np.median(np.abs(residual))
-    scale = min(reach_m, max(TUKEY_C * sigma, MIN_SCALE_M))
+        return None
+    scales = _tukey_scales(residual, np.vstack([p.normals for p in pairs]), reach_m)
     points = np.vstack([p.points for p in pairs])
-    centre = points.mean(axis=0)
-    lever = np.sqrt(((points - centre) ** 2).sum(axis=1).mean())  # rotations in units of metres at this lever
+    if open_motions is None:
+        centre = points.mean(axis=0)
+        lever = np.sqrt(((points - centre) ** 2).sum(axis=1).mean())  # rotations in units of metres at this lever
+    else:
+        centre, lever = open_motions.centre, open_motions.lever
     width = 6 * len(free)
     column = {int(k): 6 * i for i, k in enumerate(free)}
     hessian, gradient = np.zeros((width, width)), np.zeros(width)
     rows = []
-    for p in pairs:
+    for p, scale in zip(pairs, np.split(scales, np.cumsum([len(p.residuals) for p in pairs])[:-1])):
         weight = p.area_m2 * np.clip(1.0 - (p.residuals / scale) ** 2, 0.0, None) ** 2
         arm = (p.points - centre) / lever
         jacobian = np.hstack([np.cross(arm, p.normals), p.normals])
@@ -164,18 +230,13 @@ def _joint_step(pairs: list[_Pairs], free: np.ndarray, reach_m: float):
         hessian += selector.T @ (weighted.T @ jacobian) @ selector
         gradient -= selector.T @ (weighted.T @ p.residuals)
         rows.append((arm, p.normals, weight, selector))
-    curvature, directions = np.linalg.eigh(hessian)
-    # The information along each direction: per pair, the square of its normal's component
-    # along the motion's velocity u there, less what a normal tilted by noise would give
-    # (NORMAL_NOISE^2 |u|^2): many nearly level patches of a table must not add up to
-    # fixing a horizontal slide, nor the patches around a pipe a turn about its axis.
-    information = np.zeros(width)
-    for arm, normals, weight, selector in rows:
-        motion = selector @ directions  # (6, D): each direction's rotation and translation for this pair
-        velocity = np.cross(motion[:3].T[None, :, :], arm[:, None, :]) + motion[3:].T[None, :, :]
-        along = np.einsum("ndk,nk->nd", velocity, normals)
-        information += weight @ np.maximum(along * along - NORMAL_NOISE**2 * (velocity * velocity).sum(axis=2), 0.0)
-    fixed = information >= MIN_FACING_AREA_M2
+    if open_motions is None:
+        curvature, directions = np.linalg.eigh(hessian)
+    else:
+        basis = open_motions.basis
+        curvature, within = np.linalg.eigh(basis.T @ hessian @ basis)
+        directions = basis @ within
+    fixed = _information(rows, directions) >= MIN_FACING_AREA_M2
     step = directions[:, fixed] @ ((directions[:, fixed].T @ gradient) / curvature[fixed])
     # How many independent open directions move each frame: the rank of its block of the open
     # subspace, counting singular values whose square (the share of a direction) is a fifth or more.
@@ -183,7 +244,35 @@ def _joint_step(pairs: list[_Pairs], free: np.ndarray, reach_m: float):
     open_dof = [int((np.linalg.svd(block, compute_uv=False) ** 2 >= 0.2).sum()) for block in blocks]
     motions = [_small_motion(part[:3] / lever, part[3:], centre) for part in step.reshape(len(free), 6)]
     radius = np.sqrt(((points - centre) ** 2).sum(axis=1).max())
-    return motions, radius, np.array(open_dof)
+    return _Step(motions, radius, np.array(open_dof), OpenMotions(directions[:, ~fixed], centre, lever))
+
+
+def _information(rows: list, directions: np.ndarray) -> np.ndarray:
+    """(D,) the information along each direction (columns of `directions`): per pair, the square
+    of its normal's component along the motion's velocity u there, less what a normal tilted by
+    noise would give (NORMAL_NOISE^2 |u|^2), weighted: many nearly level patches of a table must
+    not add up to fixing a horizontal slide, nor the patches around a pipe a turn about its axis."""
+    information = np.zeros(directions.shape[1])
+    for arm, normals, weight, selector in rows:
+        motion = selector @ directions  # (6, D): each direction's rotation and translation for this pair
+        velocity = np.cross(motion[:3].T[None, :, :], arm[:, None, :]) + motion[3:].T[None, :, :]
+        along = np.einsum("ndk,nk->nd", velocity, normals)
+        information += weight @ np.maximum(along * along - NORMAL_NOISE**2 * (velocity * velocity).sum(axis=2), 0.0)
+    return information
+
+
+def _tukey_scales(residuals: np.ndarray, normals: np.ndarray, reach_m: float) -> np.ndarray:
+    """(N,) Tukey cut-off of each pair: c = 4.685 x 1.4826 median |r| over the pairs facing the
+    same way (the normal's cell in a 4 x 4 x 4 grid over [-1, 1]^3), within [MIN_SCALE_M,
+    reach_m]. A slide only a few faces or edges see (a box's ends) is not outvoted by the many
+    that cannot see it (its top): their residuals would set a cut-off far below its offset."""
+    cell = np.minimum(((normals + 1.0) * 2.0).astype(np.int64), 3) @ np.array([16, 4, 1])
+    order = np.argsort(cell, kind="stable")
+    _, start, size = np.unique(cell[order], return_index=True, return_counts=True)
+    medians = np.array([np.median(part) for part in np.split(np.abs(residuals[order]), start[1:])])
+    sigma = np.empty(len(residuals))
+    sigma[order] = np.repeat(1.4826 * medians, size)
+    return np.clip(TUKEY_C * sigma, MIN_SCALE_M, reach_m)
 
 
 def _small_motion(rotation_vector: np.ndarray, translation: np.ndarray, centre: np.ndarray) -> np.ndarray:
