@@ -291,9 +291,9 @@ def test_the_summary_lists_every_warning_of_each_scan_as_plan_prints_them(tmp_pa
 @pytest.mark.parametrize(
     ("folder", "problem"),
     [
-        ("{file}/out", "cannot create the output folder (Not a directory)"),
-        ("{file}", "exists and is not a folder"),
-        ("{unwritable}", "cannot write in the output folder (Permission denied)"),
+        ("{file}/out", "cannot create the folder (Not a directory)"),
+        ("{file}", "is a file, not a folder"),
+        ("{unwritable}", "cannot write in {unwritable} (Permission denied)"),
     ],
 )
 def test_an_output_folder_that_cannot_be_written_is_one_line_before_any_scan(tmp_path, folder, problem):
@@ -307,4 +307,4 @@ def test_an_output_folder_that_cannot_be_written_is_one_line_before_any_scan(tmp
     out = folder.format(file=a_file, unwritable=unwritable)
     result = weldseam("batch", SAMPLES / "v_butt.ply", "-o", out)
     assert result.returncode == 2
-    assert result.stderr.decode() == f"Error: {out}: {problem}\n"  # nothing planned, no traceback
+    assert result.stderr.decode() == f"Error: {out}: {problem.format(unwritable=unwritable)}\n"  # nothing planned, no traceback

@@ -19,7 +19,6 @@ import glob
 import hashlib
 import json
 import os
-import tempfile
 import time
 from collections.abc import Callable, Iterator
 from contextlib import closing
@@ -74,23 +73,6 @@ class JobResult:
     @property
     def failed(self) -> bool:
         return self.status in ("failed", "no-seam")
-
-
-def prepare_output_folder(out_dir: Path) -> None:
-    """Create OUTDIR if needed and prove it writable (a file created there and removed), so that a
-    bad -o is one InputError before any scan is planned."""
-    if out_dir.exists() and not out_dir.is_dir():
-        raise InputError(f"{out_dir}: exists and is not a folder")
-    try:
-        out_dir.mkdir(parents=True, exist_ok=True)
-    except OSError as error:
-        raise InputError(f"{out_dir}: cannot create the output folder ({error.strerror or error})") from None
-    try:
-        descriptor, probe = tempfile.mkstemp(prefix=".weldseam-probe-", dir=out_dir)
-    except OSError as error:
-        raise InputError(f"{out_dir}: cannot write in the output folder ({error.strerror or error})") from None
-    os.close(descriptor)
-    os.unlink(probe)
 
 
 def find_scans(inputs: list[str]) -> list[Path]:

@@ -61,10 +61,11 @@ def batch(
 ) -> None:
     """Plan many scans: one path file per scan, a summary, failures never stop the others."""
     with reported():
-        from weldseam.batch import find_scans, make_jobs, prepare_output_folder, run_batch
+        from weldseam.batch import find_scans, make_jobs, run_batch
         from weldseam.batch_workers import Interrupted, StopSignals
         from weldseam.config import config_to_dict, effective_config
         from weldseam.errors import InputError
+        from weldseam.io.atomic import prepare_folder
         from weldseam.io.hand_eye import read_hand_eye
 
         if hand_eye is not None:
@@ -77,7 +78,7 @@ def batch(
         scans = find_scans(inputs)
         if not scans:
             raise InputError(f"no scans (.ply .pcd .xyz .txt .npy .png) in {' '.join(inputs)}")
-        prepare_output_folder(out_dir)
+        prepare_folder(out_dir)
         output_format = "json" if config.output.format == "auto" else config.output.format
         work = make_jobs(
             scans,
