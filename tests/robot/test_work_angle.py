@@ -142,3 +142,30 @@ def test_a_zero_work_angle_leaves_the_torch_as_planned():
     shaped, rule = shaped_path(path, Shaping())
     assert rule.side == "lower_face" and rule.rotation_deg == 0.0
     np.testing.assert_array_equal(shaped.rotations[0], path.rotations[0])
+
+
+@pytest.fixture(scope="module")
+def lap_beside_fillet():
+    """The planned paths of a lap beside a fillet lying flat on the table, in the scan's base frame (z up)."""
+    from weldseam.config import PlanConfig
+    from weldseam.pipeline.run import plan_paths
+    from weldseam.synthetic.joints import lap_and_fillet
+    from weldseam.synthetic.scenes import default_camera, make_scan
+    from weldseam.types import Scan
+
+    rng = np.random.default_rng(7)
+    scene = lap_and_fillet(rng, mount="table")
+    scan = make_scan(scene, rng, T_base_camera=default_camera(scene, rng))
+    paths = plan_paths(Scan(points_m=scan.points_m, camera_origin_m=scan.camera_origin_m), PlanConfig()).paths
+    return {path.joint: path for path in paths}
+
+
+def test_a_planned_lap_and_fillet_each_tilt_toward_their_bottom_plate(lap_beside_fillet):
+    assert sorted(lap_beside_fillet) == ["fillet", "lap"]
+    for joint, path in lap_beside_fillet.items():
+        planned_deg = angle_from_plane_deg(path.rotations[:, :, 2], UP)  # both bottom plates lie flat
+        assert abs(np.median(planned_deg) - 45.0) < 3.0, f"{joint}: the lap's split and the fillet's bisector"
+        forward = tilted_axes(path, 12.0)
+        np.testing.assert_allclose(angle_from_plane_deg(forward, UP), planned_deg + 12.0, atol=0.5, err_msg=joint)
+        np.testing.assert_allclose(tilted_axes(reversed_seam(path), 12.0), forward[::-1], atol=1e-12)
+        assert work_angle_rule(path, 12.0).side == work_angle_rule(reversed_seam(path), 12.0).side == "lower_face"
