@@ -8,7 +8,9 @@ from tests.synthetic.checks import (
     distance_to_mesh, opening_edges, polyline_projection, seam_frame,
 )
 from weldseam.geometry import unit
-from weldseam.synthetic.joints import bevel, clutter, lap, lap_and_fillet, outside_corner, square_butt, tacked
+from weldseam.synthetic.joints import (
+    bevel, clutter, lap, lap_and_fillet, outside_corner, square_butt, tacked, v_groove_and_square_butt,
+)
 from weldseam.synthetic.scenes import UP, make_scan
 from weldseam.synthetic.sensor import cast_rays
 
@@ -38,6 +40,24 @@ def test_groove_truth_is_the_middle_of_the_opening_at_the_surface(family, seed):
             assert abs(slopes[0]) == pytest.approx(1.0, abs=2e-3)  # faces at 45 deg to it
         else:
             assert slopes[0] == pytest.approx(0.0, abs=1e-3)  # perpendicular to the plates
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_v_groove_and_square_butt_truth_is_each_openings_middle_with_its_own_kind(seed):
+    scene = v_groove_and_square_butt(np.random.default_rng(seed))
+    assert [seam.joint for seam in scene.seams] == ["v_groove", "square_butt"]
+    widths = []
+    for seam in scene.seams:
+        for index in _interior(seam).astype(int):
+            point, axis = seam.points_m[index], seam.torch_axes[index]
+            _, across = seam_frame(seam, index)
+            (left, right), slopes = opening_edges(scene.mesh, point, axis, across)
+            assert np.linalg.norm((left + right) / 2 - point) < 4e-5
+            assert slopes[0] == pytest.approx(0.0, abs=1e-3) and slopes[1] == pytest.approx(0.0, abs=1e-3)
+            widths.append((seam.joint, np.linalg.norm(right - left)))
+    butt = [width for joint, width in widths if joint == "square_butt"]
+    assert 0.0008 - 1e-5 <= min(butt) and max(butt) <= 0.003 + 1e-5, "the square gap, no bevel"
+    assert min(width for joint, width in widths if joint == "v_groove") > max(butt), "the V opens wider"
 
 
 def test_bevel_has_one_square_edge_and_one_bevelled_edge():

@@ -129,6 +129,37 @@ def lap_and_fillet(
                    max_view_tilt_deg=15.0, target_m=[-gap / 2, 0.0, top_z])
 
 
+def v_groove_and_square_butt(
+    rng: np.random.Generator, *, thickness_m=None, included_angle_deg=None, root_gap_m=None,
+    root_face_m=None, square_gap_m=None, separation_m=None, length_m=None, mount=None, yaw_deg=None,
+) -> SyntheticScene:
+    """A V-groove and a square butt in one plate row: three plates (6-8 mm thick, 150-220 mm
+    long along y) side by side, the first two joined by a single V (included angle 60-90 deg,
+    root gap 0-2 mm, root face 0.5-2 mm) along x = -separation / 2, the last two by square
+    edges 0.8-3 mm apart along x = +separation / 2, 70-100 mm between the seams; the outer
+    plates 50-70 mm wide. Seams: the V's and the gap's centre lines at the surface, torch
+    axis minus the plate normal; the camera looks at the middle between them."""
+    thickness = _draw(rng, thickness_m, 0.006, 0.008)
+    groove = _draw_groove(rng, included_angle_deg, root_gap_m, 0.002)
+    root_face = _draw(rng, root_face_m, 0.0005, 0.002)
+    gap = _draw(rng, square_gap_m, 0.0008, 0.003)
+    separation = _draw(rng, separation_m, 0.07, 0.10)
+    length = _draw(rng, length_m, 0.15, 0.22)
+    outer = [_draw(rng, None, 0.05, 0.07) for _ in range(2)]
+    v_x, butt_x, half = -separation / 2, separation / 2, length / 2
+    first = _plate_piece(thickness, [((-1.0, 0.0), -v_x + outer[0]), *_y_bounds(length)],
+                         [((v_x, 0.0), (-1.0, 0.0))], groove, root_face)
+    middle = _plate_piece(thickness, [((1.0, 0.0), butt_x - gap / 2), *_y_bounds(length)],
+                          [((v_x, 0.0), (1.0, 0.0))], groove, root_face)
+    last = _box([butt_x + gap / 2, -half, 0.0], [butt_x + gap / 2 + outer[1], half, thickness])
+    seams = [
+        _seam(_line([v_x, -half, thickness], [v_x, half, thickness]), -UP, "v_groove"),
+        _seam(_line([butt_x, -half, thickness], [butt_x, half, thickness]), -UP, "square_butt"),
+    ]
+    return _placed("v_groove_and_square_butt", [first, middle, last], seams, rng, mount, yaw_deg,
+                   target_m=[0.0, 0.0, thickness])
+
+
 def bevel(
     rng: np.random.Generator, *, thickness_m=None, bevel_angle_deg=None, root_gap_m=None,
     root_face_m=None, length_m=None, plate_width_m=None, mount=None, yaw_deg=None,
