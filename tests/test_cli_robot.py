@@ -247,3 +247,96 @@ def test_robot_sim_serves_until_interrupted_then_leaves_its_log(tmp_path):
     assert server.returncode == 0, stderr
     record = json.loads(log.read_text())
     assert record["host"] == "127.0.0.9" and record["robot"] == "ur5" and record["events"] == []
+
+
+@pytest.fixture(scope="module")
+def fillet_both_ways(tmp_path_factory) -> list[str]:
+    """The T-fillet sample planned twice, welded +x and -x: the same seam, travel and across-axis flipped."""
+    folder = tmp_path_factory.mktemp("fillet")
+    outputs = []
+    for direction in ("+x", "-x"):
+        output = folder / f"fillet{direction}.json"
+        result = run("plan", "samples/fillet_t.png", "--intrinsics", "samples/d415.intrinsics.json", "--camera-pose",
+                     "samples/fillet_t.pose.json", f"--direction={direction}", "-o", str(output), "-q")  # fmt: skip
+        assert result.returncode == 0, result.stderr
+        outputs.append(str(output))
+    return outputs
+
+
+def weld_torch_axes(report: dict) -> np.ndarray:
+    """(K, 3) torch axes (tool z) of the weld poses of a `check --json` report."""
+    from scipy.spatial.transform import Rotation
+
+    poses = np.array([row["pose"] for row in report["rows"] if row["kind"] == "weld"])
+    return Rotation.from_rotvec(poses[:, 3:]).as_matrix()[:, :, 2]
+
+
+def weld_seam_points(report: dict, standoff_m: float) -> np.ndarray:
+    """(K, 3) the seam points (scan frame) the weld poses of a `check --json` report stand off from."""
+    poses = np.array([row["pose"] for row in report["rows"] if row["kind"] == "weld"])
+    base = np.array([float(value) for value in BASE.split(",")[:3]])
+    return poses[:, :3] + standoff_m * weld_torch_axes(report) - base
+
+
+def degrees_below_horizontal(axes: np.ndarray) -> np.ndarray:
+    return np.degrees(np.arcsin(-axes[:, 2]))
+
+
+def test_a_fillet_welded_either_way_gets_the_same_tilt_toward_its_bottom_plate(fillet_both_ways):
+    planned = read_paths(fillet_both_ways[0])[0]
+    below_deg = degrees_below_horizontal(planned.rotations[:, :, 2])
+    assert abs(below_deg.mean() - 45.0) < 1.0, "the plan's bisector, 45 deg from the bottom plate"
+    means = []
+    for path in fillet_both_ways:
+        result = run("check", path, "--robot-base", BASE, "--standoff-mm", "12", "--work-angle-deg", "10", "--json")
+        assert result.returncode == 0, result.stderr
+        report = json.loads(result.stdout)
+        assert [(seam["joint"], seam["side"]) for seam in report["seams"]] == [("fillet", "lower_face")]
+        axes, points = weld_torch_axes(report), weld_seam_points(report, 0.012)
+        nearest = np.argmin(np.linalg.norm(points[:, None] - planned.positions_m, axis=2), axis=1)
+        assert np.linalg.norm(points - planned.positions_m[nearest], axis=1).max() < 1e-6, "the tip on the seam"
+        # The bottom plate is the table (base z up): at every kept pose the torch stands 10 deg steeper to it.
+        np.testing.assert_allclose(degrees_below_horizontal(axes), below_deg[nearest] + 10.0, atol=0.1)
+        means.append(axes.mean(axis=0) / np.linalg.norm(axes.mean(axis=0)))
+    assert np.degrees(np.arccos(np.clip(means[0] @ means[1], -1, 1))) < 0.2, "the same physical tilt both ways"
+
+
+def test_check_names_the_rule_each_seam_got_when_given_a_work_angle(path_file):
+    result = run("check", path_file, "--robot-base", BASE, "--standoff-mm", "12", "--work-angle-deg", "5")
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.splitlines()[-1] == "seam 0: v_groove, work angle 5 deg toward the side away from the robot"
+    plain = run("check", path_file, "--robot-base", BASE, "--standoff-mm", "12")
+    assert "work angle" not in plain.stdout
+
+
+def test_a_work_angle_on_a_csv_is_refused_naming_the_file_before_any_connection(tmp_path, path_file):
+    from weldseam.io.paths import write_paths
+    from weldseam.types import RunResult
+
+    csv = tmp_path / "path.csv"
+    write_paths(RunResult(paths=tuple(read_paths(path_file))), csv)
+    message = (f"Error: {csv}: seam 0 names no joint kind (a CSV names none), and the side a work angle tilts to "
+               "depends on it: give --joint (v_groove, bevel, square_butt, fillet, lap, outside_corner) or the "
+               "plan's .json\n")  # fmt: skip
+    for command, options in (("check", []), ("send", ["--host", "127.0.0.254", "--yes"])):
+        result = run(command, str(csv), "--robot-base", BASE, "--work-angle-deg", "5", *options)
+        # Exit 2, not 6: nothing is listening at 127.0.0.254, so no connection was tried.
+        assert (result.returncode, result.stdout, result.stderr) == (2, "", message), command
+    stated = run("check", str(csv), "--robot-base", BASE, "--standoff-mm", "12", "--work-angle-deg", "5", "--joint",
+                 "v_groove", "--json")  # fmt: skip
+    own = run("check", path_file, "--robot-base", BASE, "--standoff-mm", "12", "--work-angle-deg", "5", "--json")
+    assert stated.returncode == own.returncode == 0, stated.stderr
+    np.testing.assert_allclose(weld_torch_axes(json.loads(stated.stdout)), weld_torch_axes(json.loads(own.stdout)),
+                               atol=1e-8)  # fmt: skip
+    assert run("check", str(csv), "--robot-base", BASE, "--standoff-mm", "12").returncode == 0, "no angle, no kind needed"
+
+
+@pytest.mark.parametrize(
+    "joint, message",
+    [("fillet", "every seam names its joint kind; --joint is for a path that names none (a CSV)"),
+     ("tee", "--joint 'tee': choose one of v_groove, bevel, square_butt, fillet, lap, outside_corner")],
+)  # fmt: skip
+def test_a_joint_nothing_takes_is_refused(path_file, joint, message):
+    result = run("check", path_file, "--robot-base", BASE, "--joint", joint)
+    assert result.returncode == 2 and result.stdout == ""
+    assert result.stderr.startswith("Error: ") and result.stderr.rstrip().endswith(message)

@@ -36,6 +36,8 @@ class Intrinsics:
 
 
 FRAMES = ("base", "camera")
+# The joint kinds a path's seam can name (weldseam.pipeline.joints.base.JointKind's values).
+JOINT_KINDS = ("v_groove", "bevel", "square_butt", "fillet", "lap", "outside_corner")
 
 
 @dataclass(frozen=True)
@@ -80,7 +82,8 @@ class WeldPath:
     rotations: (K, 3, 3) tool frames; column 0 = x = y cross z, column 1 = y = travel
         direction, column 2 = z = torch axis pointing INTO the work.
     closed: the seam is a loop (the last pose joins the first).
-    joint: the joint kind: "v_groove", "fillet", "lap", "square_butt", "bevel" or "outside_corner".
+    joint: the joint kind: "v_groove", "fillet", "lap", "square_butt", "bevel" or "outside_corner"
+        (JOINT_KINDS); None when unknown (a path read from a CSV names none).
     confidence: 0..1, how sure the detector is that this is a weld seam.
     pose_confidence: (K,) 0..1 per pose, how sure its position and axis are (1: its cross-section
         fitted the joint; less where a face was unseen, a dropout bridged, a hole interpolated, or
@@ -92,7 +95,7 @@ class WeldPath:
     positions_m: np.ndarray
     rotations: np.ndarray
     closed: bool = False
-    joint: str = "v_groove"
+    joint: str | None = None
     confidence: float = 1.0
     pose_confidence: np.ndarray | None = None
     tacks: tuple[Tack, ...] = ()

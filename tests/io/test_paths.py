@@ -128,6 +128,8 @@ def test_round_trip(tmp_path, name, fmt, rotation):
     if out.suffix.lower() == ".json":
         assert [(p.closed, p.joint, p.confidence) for p in read] == [
             (False, "v_groove", 0.931234568), (True, "fillet", 0.5)]
+    else:  # a CSV names no joint kind: unknown, never a guessed one
+        assert [(p.closed, p.joint, p.confidence) for p in read] == [(False, None, 1.0), (False, None, 1.0)]
     assert sorted(p.name for p in tmp_path.iterdir()) == [out.name]
 
 
@@ -226,7 +228,7 @@ def expect_error(path, problem: str) -> None:
      r'not a weldseam path file \(no "format": "weldseam\.path"\)'),
     ("p.json", '{"format": "weldseam.path", "seams": {}}', r'"seams" must be a list of objects'),
     ("p.json", '{"format": "weldseam.path", "seams": [{"id": "0", "poses": []}]}',
-     "seam 0: id must be an integer, closed a boolean, joint a string and confidence a number"),
+     "seam 0: id must be an integer, closed a boolean, joint a string \\(or null: unknown\\) and confidence a number"),
     ("p.json", '{"format": "weldseam.path", "seams": [{"id": 4, "poses": [{"x": 1}]}]}',
      "seam 4: poses must be a list of objects with numbers x, y, z, qx, qy, qz, qw"),
     ("p.json", '{"format": "weldseam.path", "seams": [{"id": 4, "poses": [{"x": 1, "y": 2, "z": 3, "qx": 0, '

@@ -20,7 +20,7 @@ def plate_and_path():
         "params": {"normals": {"radius_m": 0.006}},
         "input": {"path": "plate.ply", "points": 50000, "sha256": "abc"},
     }
-    return points, [WeldPath(0, positions, rotations)], record
+    return points, [WeldPath(0, positions, rotations, joint="v_groove")], record
 
 
 @pytest.fixture(scope="module")

@@ -13,9 +13,10 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from weldseam.io.paths import read_paths
+from weldseam.io.paths import read_paths, write_paths
 from weldseam.robot.moves import Shaping, motion_plan
 from weldseam.robot.sim_controller import Faults
+from weldseam.types import RunResult
 
 BASE = "0.45,0.1,0.05,0,0,0"
 SHAPING = ["--robot-base", BASE, "--standoff-mm", "12", "--arc-do", "1", "--speed-mm-s", "10"]
@@ -264,3 +265,27 @@ def test_a_pose_the_controller_cannot_reach_stops_the_job_before_any_weld(robot_
     kinds = [event["event"] for event in sim.events]
     assert "fault" in kinds and "path" not in kinds
     assert not any(event["event"] == "digital_output" and event["on"] for event in sim.events), "the arc never lit"
+
+
+def test_a_work_angle_reaches_the_controller_on_each_seams_side_and_send_names_it(robot_sim, two_seams, tmp_path):
+    sim = robot_sim(speedup=100.0)
+    result = weldseam("send", two_seams, "--host", sim.host, *SHAPING, "--work-angle-deg", "8", "--yes")
+    assert result.returncode == 0, result.stderr
+    assert result.stderr.splitlines()[1:] == [
+        f"seam {seam}: v_groove, work angle 8 deg toward the side away from the robot" for seam in (0, 1)]
+    setup = Shaping(base_pose=tuple(float(v) for v in BASE.split(",")), standoff_m=0.012, work_angle_deg=8.0)
+    plan, flat = motion_plan(read_paths(two_seams), setup), expected_plan(two_seams)
+    for path, seam, untilted in zip(events_of(sim, "path"), plan.seams, flat.seams, strict=True):
+        entries = np.array(path["entries"])
+        for index, (received, planned) in enumerate(zip(entries[:, :6], seam.weld_poses, strict=True)):
+            assert_same_pose(received, planned, f"seam {seam.seam_id} waypoint {index}")
+        # The groove runs across the robot's reach (along base y): the torch turns 8 deg toward base +x.
+        turned = Rotation.from_rotvec(entries[:, 3:6]).as_matrix()[:, :, 2]
+        plain = Rotation.from_rotvec(untilted.weld_poses[:, 3:]).as_matrix()[:, :, 2]
+        assert np.all(turned[:, 0] > plain[:, 0] + np.sin(np.radians(7.0)))
+
+    csv = tmp_path / "path.csv"
+    write_paths(RunResult(paths=tuple(read_paths(two_seams))), csv)
+    refused = weldseam("send", str(csv), "--host", sim.host, *SHAPING, "--work-angle-deg", "8", "--yes")
+    assert refused.returncode == 2 and refused.stderr.startswith(f"Error: {csv}: seam 0 names no joint kind")
+    assert len(events_of(sim, "path")) == 2, "the CSV refused before anything reached the controller"

@@ -8,7 +8,9 @@ from tests.synthetic.checks import (
     distance_to_mesh, opening_edges, polyline_projection, seam_frame,
 )
 from weldseam.geometry import unit
-from weldseam.synthetic.joints import bevel, clutter, lap, outside_corner, square_butt, tacked
+from weldseam.synthetic.joints import (
+    bevel, clutter, lap, lap_and_fillet, outside_corner, square_butt, tacked, v_groove_and_square_butt,
+)
 from weldseam.synthetic.scenes import UP, make_scan
 from weldseam.synthetic.sensor import cast_rays
 
@@ -38,6 +40,24 @@ def test_groove_truth_is_the_middle_of_the_opening_at_the_surface(family, seed):
             assert abs(slopes[0]) == pytest.approx(1.0, abs=2e-3)  # faces at 45 deg to it
         else:
             assert slopes[0] == pytest.approx(0.0, abs=1e-3)  # perpendicular to the plates
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_v_groove_and_square_butt_truth_is_each_openings_middle_with_its_own_kind(seed):
+    scene = v_groove_and_square_butt(np.random.default_rng(seed))
+    assert [seam.joint for seam in scene.seams] == ["v_groove", "square_butt"]
+    widths = []
+    for seam in scene.seams:
+        for index in _interior(seam).astype(int):
+            point, axis = seam.points_m[index], seam.torch_axes[index]
+            _, across = seam_frame(seam, index)
+            (left, right), slopes = opening_edges(scene.mesh, point, axis, across)
+            assert np.linalg.norm((left + right) / 2 - point) < 4e-5
+            assert slopes[0] == pytest.approx(0.0, abs=1e-3) and slopes[1] == pytest.approx(0.0, abs=1e-3)
+            widths.append((seam.joint, np.linalg.norm(right - left)))
+    butt = [width for joint, width in widths if joint == "square_butt"]
+    assert 0.0008 - 1e-5 <= min(butt) and max(butt) <= 0.003 + 1e-5, "the square gap, no bevel"
+    assert min(width for joint, width in widths if joint == "v_groove") > max(butt), "the V opens wider"
 
 
 def test_bevel_has_one_square_edge_and_one_bevelled_edge():
@@ -70,6 +90,31 @@ def test_lap_truth_is_the_inside_corner_at_the_top_plates_edge(seed):
     # From 3 mm back along the torch axis the ray meets nothing before the corner.
     t_hit, _ = cast_rays(scene.mesh, points - 0.003 * axes, axes)
     assert np.allclose(t_hit, 0.003, atol=1e-6)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_lap_and_fillet_truth_is_each_inside_corner_with_its_own_kind(seed):
+    scene = lap_and_fillet(np.random.default_rng(seed))
+    lap_seam, fillet_seam = scene.seams
+    base, top, web = scene.parts
+    assert (lap_seam.joint, fillet_seam.joint) == ("lap", "fillet")
+    for seam, faces in ((lap_seam, (base, top)), (fillet_seam, (top, web))):
+        points, axes = seam.points_m[::40], seam.torch_axes[::40]
+        for face in faces:
+            assert distance_to_mesh(face, points).max() < 1e-6
+        # From 3 mm back along the torch axis the ray meets nothing before the corner.
+        t_hit, _ = cast_rays(scene.mesh, points - 0.003 * axes, axes)
+        assert np.allclose(t_hit, 0.003, atol=1e-6)
+    # The two corners open the same way (toward +x before the scene is turned and mounted).
+    assert np.dot(lap_seam.torch_axes[0], fillet_seam.torch_axes[0]) > 0.9
+
+
+def test_lap_and_fillet_torch_axes_are_the_laps_split_and_the_fillets_bisector():
+    scene = lap_and_fillet(np.random.default_rng(5), torch_split_deg=60.0, mount="table", yaw_deg=0.0)
+    lap_axes, fillet_axes = scene.seams[0].torch_axes, scene.seams[1].torch_axes
+    assert np.degrees(np.arcsin(-lap_axes[:, 2])) == pytest.approx(np.full(len(lap_axes), 60.0))
+    assert lap_axes[:, 0] == pytest.approx(np.full(len(lap_axes), -0.5)), "into the corner, from its open side"
+    assert fillet_axes == pytest.approx(np.tile([-np.sqrt(0.5), 0.0, -np.sqrt(0.5)], (len(fillet_axes), 1)))
 
 
 @pytest.mark.parametrize("split_deg", [45.0, 60.0])

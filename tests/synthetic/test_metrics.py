@@ -9,9 +9,10 @@ from weldseam.synthetic.scenes import make_scan, plain_plate, ring_groove, v_but
 from weldseam.types import WeldPath
 
 
-def _truth_paths(scene, scan, step=1, offset_m=0.0, tilt_deg=0.0):
+def _truth_paths(scene, scan, step=1, offset_m=0.0, tilt_deg=0.0, joints=None):
     """One WeldPath per seam through its visible truth points (every `step`-th and the last), moved
-    `offset_m` along the tool x axis and tilted `tilt_deg` about the travel axis."""
+    `offset_m` along the tool x axis and tilted `tilt_deg` about the travel axis, each naming
+    its seam's joint kind (or `joints[k]`)."""
     paths = []
     for k, (seam, visible) in enumerate(zip(scene.seams, scan.visible)):
         keep = np.unique(np.r_[0 : visible.sum() : step, visible.sum() - 1])
@@ -21,7 +22,8 @@ def _truth_paths(scene, scan, step=1, offset_m=0.0, tilt_deg=0.0):
         turn = np.array([[np.cos(angle), 0, np.sin(angle)], [0, 1, 0],
                          [-np.sin(angle), 0, np.cos(angle)]])
         paths.append(WeldPath(k, points + offset_m * frames[:, :, 0], frames @ turn,
-                              closed=seam.closed and visible.all()))
+                              closed=seam.closed and visible.all(),
+                              joint=seam.joint if joints is None else joints[k]))
     return paths
 
 
@@ -90,3 +92,16 @@ def test_nothing_to_find_and_nothing_found():
     scene = v_butt(rng)
     result = evaluate([], make_scan(scene, rng), scene)
     assert result["seams_expected"] == 1 and result["coverage"] == 0.0
+
+
+def test_each_seam_counts_as_kind_matched_only_when_its_path_names_its_kind():
+    from weldseam.synthetic.joints import lap_and_fillet
+
+    rng = np.random.default_rng(24)
+    scene = lap_and_fillet(rng, mount="table")
+    scan = make_scan(scene, rng)
+    assert [seam.joint for seam in scene.seams] == ["lap", "fillet"]
+    assert evaluate(_truth_paths(scene, scan), scan, scene)["kinds_matched"] == 2
+    assert evaluate(_truth_paths(scene, scan, joints=["fillet", "fillet"]), scan, scene)["kinds_matched"] == 1
+    assert evaluate(_truth_paths(scene, scan, joints=["fillet", "lap"]), scan, scene)["kinds_matched"] == 0
+    assert evaluate(_truth_paths(scene, scan, offset_m=0.003), scan, scene)["kinds_matched"] == 0, "paths elsewhere"

@@ -13,6 +13,7 @@ import typer
 from weldseam.commands.common import EXIT_ROBOT_FAULT, EXIT_TABLE, reported, stderr
 from weldseam.errors import InputError, RobotConnectionError, RobotFault, UnreachableError, WeldseamError
 from weldseam.robot.limits import LIMITS, checked, checked_payload
+from weldseam.types import JOINT_KINDS
 
 CHECK_EPILOG = (
     "Example:\n\n"
@@ -65,8 +66,16 @@ StandoffMm = Annotated[
 ]
 WorkAngleDeg = Annotated[
     float,
-    typer.Option(help=_ranged("Torch tilt about the travel direction (sideways, across the seam), degrees.",
-                              "--work-angle-deg")),  # fmt: skip
+    typer.Option(help=_ranged("Torch tilt about the travel direction (sideways, across the seam), degrees, the "
+                              "same whichever way the seam is welded: + turns the torch toward the bottom plate "
+                              "(fillet, lap: added to the lap's split), toward the plate farther from the robot "
+                              "(v_groove, bevel, square_butt, outside_corner); see the README for the fallbacks. "
+                              "A CSV names no joint kind: give --joint.", "--work-angle-deg")),  # fmt: skip
+]
+Joint = Annotated[
+    str | None,
+    typer.Option(help="The joint kind of seams whose kind the path file does not name (a CSV names none): "
+                      f"{', '.join(JOINT_KINDS)}. Needed for a non-zero --work-angle-deg on a CSV."),  # fmt: skip
 ]
 TravelAngleDeg = Annotated[
     float,
@@ -148,13 +157,35 @@ def _setup(*, robot: str, robot_base: str, tcp: str, standoff_mm: float, work_an
     )
 
 
-def _paths(path: str):
-    """The weld paths of a path file; a CSV seam whose ends nearly meet gets a warning (CSV cannot say closed)."""
+def _with_joints(paths: list, path: str, joint: str | None, work_angle_deg: float) -> list:
+    """`paths` with `joint` as the kind of each seam of unknown kind; InputError naming the file for a
+    --joint nothing takes, and for a work angle on a seam whose kind stays unknown (its side depends on it)."""
+    from dataclasses import replace
+
+    unknown = [seam.seam_id for seam in paths if seam.joint not in JOINT_KINDS]
+    if joint is not None:
+        if joint not in JOINT_KINDS:
+            raise InputError(f"--joint {joint!r}: choose one of {', '.join(JOINT_KINDS)}")
+        if not unknown:
+            raise InputError(f"{path}: every seam names its joint kind; --joint is for a path that names none "
+                             "(a CSV)")  # fmt: skip
+        return [replace(seam, joint=joint) if seam.seam_id in unknown else seam for seam in paths]
+    if unknown and work_angle_deg != 0.0:
+        seam = next(seam for seam in paths if seam.seam_id == unknown[0])
+        named = "no joint kind (a CSV names none)" if seam.joint is None else f"the unknown joint kind {seam.joint!r}"
+        raise InputError(f"{path}: seam {seam.seam_id} names {named}, and the side a work angle tilts to depends on "
+                         f"it: give --joint ({', '.join(JOINT_KINDS)}) or the plan's .json")  # fmt: skip
+    return paths
+
+
+def _paths(path: str, joint: str | None, work_angle_deg: float):
+    """The weld paths of a path file, each with a joint kind where a work angle needs one (_with_joints);
+    a CSV seam whose ends nearly meet gets a warning (CSV cannot say closed)."""
     import numpy as np
 
     from weldseam.io.paths import read_paths
 
-    paths = read_paths(path)
+    paths = _with_joints(read_paths(path), path, joint, work_angle_deg)
     if path.lower().endswith(".csv"):
         for seam in paths:
             steps_m = np.linalg.norm(np.diff(seam.positions_m, axis=0), axis=1)
@@ -164,6 +195,13 @@ def _paths(path: str):
                        "cannot mark a seam closed, so that gap stays unwelded: use the plan's .json to weld it all "
                        "round")  # fmt: skip
     return paths
+
+
+def _work_angle_lines(plan) -> list[str]:
+    """Per seam, the side its work angle turned the torch to (none when no seam got a work angle)."""
+    if all(seam.work_angle.work_angle_deg == 0.0 for seam in plan.seams):
+        return []
+    return [seam.work_angle.text() for seam in plan.seams]
 
 
 def _checked(plan, robot: str):
@@ -213,6 +251,7 @@ def check(
     tcp: Tcp = "0,0,0.2,0,0,0",
     standoff_mm: StandoffMm = 0.0,
     work_angle_deg: WorkAngleDeg = 0.0,
+    joint: Joint = None,
     travel_angle_deg: TravelAngleDeg = 0.0,
     tolerance_mm: ToleranceMm = 0.2,
     angle_tolerance_deg: AngleToleranceDeg = 1.0,
@@ -234,13 +273,16 @@ def check(
                        work_angle_deg=work_angle_deg, travel_angle_deg=travel_angle_deg, tolerance_mm=tolerance_mm,
                        angle_tolerance_deg=angle_tolerance_deg, approach_mm=approach_mm, blend_mm=blend_mm,
                        speed_mm_s=speed_mm_s, move_speed_mm_s=move_speed_mm_s)  # fmt: skip
-        plan = motion_plan(_paths(path), setup)
+        plan = motion_plan(_paths(path, joint, work_angle_deg), setup)
         report = _checked(plan, robot)
         if as_json:
-            print(json.dumps(report.to_dict(), indent=1))
+            seams = [seam.work_angle.to_dict() for seam in plan.seams]
+            print(json.dumps({**report.to_dict(), "seams": seams}, indent=1))
         else:
             console = Console()
             console.print(_table(plan, report))
+            for line in _work_angle_lines(plan):
+                console.print(line, markup=False)
             for row in report.failures:
                 console.print(describe(row), markup=False)
         if not report.ok:
@@ -264,6 +306,7 @@ def send(
     ] = None,
     standoff_mm: StandoffMm = 0.0,
     work_angle_deg: WorkAngleDeg = 0.0,
+    joint: Joint = None,
     travel_angle_deg: TravelAngleDeg = 0.0,
     tolerance_mm: ToleranceMm = 0.2,
     angle_tolerance_deg: AngleToleranceDeg = 1.0,
@@ -307,7 +350,7 @@ def send(
                        speed_mm_s=speed_mm_s, move_speed_mm_s=move_speed_mm_s, payload_kg=payload_kg,
                        payload_cog_m=payload_cog_m, arc_do=arc_do)  # fmt: skip
         tcp_log = TcpLog(log) if log is not None else None
-        plan = motion_plan(_paths(path), setup)
+        plan = motion_plan(_paths(path, joint, work_angle_deg), setup)
         report = _checked(plan, robot)
         if not report.ok:
             raise UnreachableError(f"refusing to move: {_first_failure(report)}")
@@ -319,6 +362,8 @@ def send(
             f"payload: {payload}"
         )
         stderr(summary)
+        for line in _work_angle_lines(plan):
+            stderr(line)
         if dry_run:
             text = urscript(plan)
             if script:

@@ -140,8 +140,8 @@ def read_paths(path: str | Path) -> list[WeldPath]:
     """Read paths back from our JSON, or from a CSV with x, y, z and either rx, ry, rz or
     qx, qy, qz, qw columns (header row required; a `seam` column is optional, rows are
     grouped by it in order of first appearance). JSON poses keep their confidence (1 where a
-    pose has none); CSV paths get closed=False, joint "v_groove", confidence 1.0 and no pose
-    confidence (None: all 1). Raises InputError for anything unreadable."""
+    pose has none); CSV paths get closed=False, joint None (a CSV names no joint kind: unknown),
+    confidence 1.0 and no pose confidence (None: all 1). Raises InputError for anything unreadable."""
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in (".json", ".csv"):
@@ -237,13 +237,13 @@ def _read_json(text: str, path: Path) -> list[WeldPath]:
     paths = []
     for index, seam in enumerate(seams):
         seam_id = seam.get("id", index)
-        closed, joint = seam.get("closed", False), seam.get("joint", "v_groove")
+        closed, joint = seam.get("closed", False), seam.get("joint")
         confidence = seam.get("confidence", 1.0)
-        if not (type(seam_id) is int and type(closed) is bool and isinstance(joint, str)
+        if not (type(seam_id) is int and type(closed) is bool and (joint is None or isinstance(joint, str))
                 and type(confidence) in (int, float)):
             raise InputError(
                 f"{path}: seam {index}: id must be an integer, closed a boolean, joint a "
-                f"string and confidence a number"
+                f"string (or null: unknown) and confidence a number"
             )
         try:
             table = np.array(

@@ -99,7 +99,7 @@ def make_drawing(
     seams = []
     for path in paths:
         tails, heads = torch_arrows(path)
-        kind = f"{path.joint}{', closed' if path.closed else ''}"
+        kind = f"{path.joint or 'unknown joint'}{', closed' if path.closed else ''}"
         confidence = np.ones(len(path.positions_m)) if path.pose_confidence is None else path.pose_confidence
         label = f"seam {path.seam_id} ({kind})"
         seams.append(SeamDrawing(path.seam_id, path.positions_m, tails, heads, label, np.asarray(confidence, float)))

@@ -228,7 +228,7 @@ def _seam_row(seam: dict) -> str:
     lowest, below = pose_summary(seam)
     cells = (
         seam.get("id"),
-        html.escape(str(seam.get("joint"))),
+        html.escape(str(seam.get("joint") or "unknown")),
         f"{seam.get('length_m', 0) * 1000:.1f}",
         len(seam.get("poses", [])),
         f"{seam.get('confidence', 0):.2f}",

@@ -194,7 +194,7 @@ def _seam_rows(seam: dict) -> list:
     """A seam's table row (cells), and a line of text when some of its poses are below 1."""
     cells = (
         str(seam.get("id")),
-        str(seam.get("joint")),
+        str(seam.get("joint") or "unknown"),
         f"{seam.get('length_m', 0) * 1000:.1f}",
         str(len(seam.get("poses", []))),
         f"{seam.get('confidence', 0):.2f}",

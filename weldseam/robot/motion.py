@@ -13,6 +13,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from weldseam.geometry import rotation_vectors
+from weldseam.robot.work_angle import WorkAngleRule
 
 
 def pose_matrices(pose_vectors: np.ndarray) -> np.ndarray:
@@ -41,6 +42,7 @@ class SeamMotion:
     weld_poses: (K, 6) UR pose vectors in travel order (a closed seam repeats its first pose last).
     blend_radii_m: (K,) blend radius per weld pose; each <= half the shorter adjacent segment,
         the first and the last 0.
+    work_angle: the side its work angle turned the torch to (None: not shaped from a weld path).
     """
 
     seam_id: int
@@ -48,6 +50,7 @@ class SeamMotion:
     weld_poses: np.ndarray
     retreat_pose: np.ndarray
     blend_radii_m: np.ndarray
+    work_angle: WorkAngleRule | None = None
 
     @property
     def length_m(self) -> float:

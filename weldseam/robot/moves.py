@@ -6,8 +6,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from weldseam.errors import InputError
 from weldseam.robot import shaping
 from weldseam.robot.motion import MotionPlan, SeamMotion, pose_matrices, pose_vectors
+from weldseam.robot.work_angle import WorkAngleRule, work_angle_rule
 from weldseam.types import WeldPath
 
 TYPICAL_TCP = (0.0, 0.0, 0.2, 0.0, 0.0, 0.0)
@@ -34,18 +36,23 @@ class Shaping:
     arc_output: int | None = None
 
 
-def shaped_path(path: WeldPath, setup: Shaping) -> WeldPath:
-    """Base frame, tilts, decimation (on the seam points), then standoff: TCP poses as a WeldPath."""
+def shaped_path(path: WeldPath, setup: Shaping) -> tuple[WeldPath, WorkAngleRule]:
+    """Base frame, tilts (the work angle to its kind's side), decimation (on the seam points),
+    then standoff: TCP poses as a WeldPath, with the work-angle rule it got."""
     path = shaping.to_robot_base(path, pose_matrices(np.asarray(setup.base_pose)))
-    path = shaping.with_work_angle(path, setup.work_angle_deg)
+    rule = work_angle_rule(path, setup.work_angle_deg)
+    if rule.side is None and setup.work_angle_deg != 0.0:
+        raise InputError(f"seam {path.seam_id}: its joint kind is unknown ({path.joint or 'a CSV names none'}), so a "
+                         "work angle has no side; state it with --joint KIND")  # fmt: skip
+    path = shaping.with_work_angle(path, rule.rotation_deg)
     path = shaping.with_travel_angle(path, setup.travel_angle_deg)
     path = shaping.decimated(path, setup.tolerance_m, setup.angle_tolerance_deg)
-    return shaping.with_standoff(path, setup.standoff_m)
+    return shaping.with_standoff(path, setup.standoff_m), rule
 
 
 def seam_motion(path: WeldPath, setup: Shaping) -> SeamMotion:
     """One seam's approach, weld poses (K, 6), retreat and blend radii."""
-    tcp = shaped_path(path, setup)
+    tcp, rule = shaped_path(path, setup)
     matrices = np.tile(np.eye(4), (len(tcp.positions_m), 1, 1))
     matrices[:, :3, :3] = tcp.rotations
     matrices[:, :3, 3] = tcp.positions_m
@@ -55,6 +62,7 @@ def seam_motion(path: WeldPath, setup: Shaping) -> SeamMotion:
         weld_poses=pose_vectors(matrices),
         retreat_pose=pose_vectors(shaping.backed_off(matrices[-1], setup.approach_m)),
         blend_radii_m=shaping.blend_radii(tcp.positions_m, setup.max_blend_m),
+        work_angle=rule,
     )
 
 

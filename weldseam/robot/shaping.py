@@ -38,7 +38,9 @@ def _tilted(path: WeldPath, local_axis: int, angle_rad: float) -> WeldPath:
 
 
 def with_work_angle(path: WeldPath, work_angle_deg: float) -> WeldPath:
-    """Rotate the torch about its travel direction (local y) by work_angle_deg; positions unchanged."""
+    """Rotate the torch about its travel direction (local y) by work_angle_deg: z turns toward +x for a
+    positive angle (a side that flips with the travel: work_angle.work_angle_rule gives the signed
+    angle that keeps a joint kind's side); positions unchanged."""
     return _tilted(path, 1, np.radians(work_angle_deg))
 
 

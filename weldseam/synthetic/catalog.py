@@ -1,8 +1,8 @@
 """Every synthetic workpiece family, and one place that draws a rendered case from a seed.
 
 FAMILIES (scenes.py) are the ten the planner was developed in; NEW_FAMILIES add a family per
-further joint (issue 22) and the curved valley. `draw_case(family, seed)` renders exactly as
-the acceptance tests and golden files always have: the family's narrow default camera and
+further joint (issue 22), the curved valley and two scenes holding two kinds (a lap and a
+fillet, a V-groove and a square butt). `draw_case(family, seed)` renders exactly as the acceptance tests and golden files always have: the family's narrow default camera and
 the default D415 model. `broad=True` draws from the wider world a cell meets: clamps and
 loose bars added where they fit (`fixtures.add_clutter`), a camera anywhere in the cone that
 sees the seam (`cameras.broad_camera`) and the sensor's ripple, stereo shadow and ragged
@@ -18,7 +18,9 @@ import numpy as np
 
 from weldseam.synthetic.cameras import broad_camera
 from weldseam.synthetic.fixtures import add_clutter
-from weldseam.synthetic.joints import bevel, clutter, lap, outside_corner, square_butt, tacked
+from weldseam.synthetic.joints import (
+    bevel, clutter, lap, lap_and_fillet, outside_corner, square_butt, tacked, v_groove_and_square_butt,
+)
 from weldseam.synthetic.pipes import pipe_on_plate, saddle
 from weldseam.synthetic.scenes import (
     FAMILIES, SyntheticScan, SyntheticScene, default_camera, make_scan,
@@ -36,6 +38,8 @@ NEW_FAMILIES: dict[str, Callable[..., SyntheticScene]] = {
     "tacked": tacked,
     "clutter": clutter,
     "valley": valley,
+    "lap_and_fillet": lap_and_fillet,
+    "v_groove_and_square_butt": v_groove_and_square_butt,
 }
 ALL_FAMILIES: dict[str, Callable[..., SyntheticScene]] = {**FAMILIES, **NEW_FAMILIES}
 GROUPS: dict[str, tuple[str, ...]] = {

@@ -33,20 +33,23 @@ def _y_bounds(length_m: float) -> list:
 
 
 def _placed(name, parts, seams, rng, mount, yaw_deg, *, fixtures=(), hidden=(), view_axis=UP,
-            max_view_tilt_deg=30.0) -> SyntheticScene:
+            max_view_tilt_deg=30.0, target_m=None) -> SyntheticScene:
     """Scene of a workpiece lying flat on z = 0: on the table, or tilted onto a wedge or two
     blocks (`mount`, drawn from MOUNTS when None), then turned by `yaw_deg`. The camera
-    looks at the middle of the first seam along `view_axis` (given flat, moved with the
-    workpiece)."""
+    looks at `target_m` (default: the middle of the first seam) along `view_axis` (both
+    given flat, moved with the workpiece)."""
     mount = str(rng.choice(MOUNTS)) if mount is None else mount
     view = np.asarray(view_axis, float)
+    target = None if target_m is None else np.asarray(target_m, float)
     if mount != "table":
         supported = rest_on_support([*parts, *fixtures], seams, rng, mount)
         count = len(parts)
         parts, seams = supported.parts[:count], supported.seams
         fixtures = [*supported.parts[count:], *supported.supports]
         view = supported.move[:3, :3] @ view
-    target = seams[0].points_m[len(seams[0].points_m) // 2]
+        target = None if target is None else supported.move[:3, :3] @ target + supported.move[:3, 3]
+    if target is None:
+        target = seams[0].points_m[len(seams[0].points_m) // 2]
     return _scene(name, parts, seams, target, _yaw(rng, yaw_deg), view, max_view_tilt_deg,
                   fixtures=fixtures, hidden=hidden)
 
@@ -85,6 +88,76 @@ def lap(
     view = [-np.sin(np.radians(25.0)), 0.0, np.cos(np.radians(25.0))]
     return _placed("lap", [bottom, top], [seam], rng, mount, yaw_deg, fixtures=[spacer],
                    view_axis=view, max_view_tilt_deg=15.0)
+
+
+def lap_and_fillet(
+    rng: np.random.Generator, *, base_thickness_m=None, top_thickness_m=None, reach_m=None,
+    web_thickness_m=None, web_height_m=None, gap_m=None, length_m=None, torch_split_deg=45.0,
+    mount=None, yaw_deg=None,
+) -> SyntheticScene:
+    """A lap and a fillet in one view: a top plate (2-6 mm thick) lying on a base plate (8-11
+    mm: an edge on the table stays under a fillet's shortest face and over a lap's tallest
+    step), its edge along y at x = 0 and the base plate reaching 30-50 mm beyond it (x > 0);
+    on the top plate a web (6-12 mm thick, 30-60 mm high) stands 55-90 mm back from that
+    edge, facing it. The web's back, the top plate's and the base plate's far edges are
+    flush (x = -gap - web thickness): one lap corner and one fillet, both open toward +x.
+    All 150-220 mm long along y.
+
+    Seams: the lap's inside corner (x = 0, torch `torch_split_deg` from the base plate, as in
+    `lap`) and the fillet where the web meets the top plate (x = -gap, torch along minus the
+    bisector). Both are seen from their open side: the camera looks at the middle between
+    them from 30 deg off the plates' normal toward +x (within 15 deg).
+    """
+    base_t = _draw(rng, base_thickness_m, 0.008, 0.011)
+    top_t = _draw(rng, top_thickness_m, 0.002, 0.006)
+    reach = _draw(rng, reach_m, 0.03, 0.05)
+    web_t = _draw(rng, web_thickness_m, 0.006, 0.012)
+    web_h = _draw(rng, web_height_m, 0.03, 0.06)
+    gap = _draw(rng, gap_m, 0.055, 0.09)
+    length = _draw(rng, length_m, 0.15, 0.22)
+    half, back, top_z = length / 2, -gap - web_t, base_t + top_t
+    base = _box([back, -half, 0.0], [reach, half, base_t])
+    top = _box([back, -half, base_t], [0.0, half, top_z])
+    web = _box([back, -half, top_z], [-gap, half, top_z + web_h])
+    split = np.radians(torch_split_deg)
+    seams = [
+        _seam(_line([0.0, -half, base_t], [0.0, half, base_t]), [-np.cos(split), 0.0, -np.sin(split)], "lap"),
+        _seam(_line([-gap, -half, top_z], [-gap, half, top_z]), [-1.0, 0.0, -1.0], "fillet"),
+    ]
+    view = [np.sin(np.radians(30.0)), 0.0, np.cos(np.radians(30.0))]
+    return _placed("lap_and_fillet", [base, top, web], seams, rng, mount, yaw_deg, view_axis=view,
+                   max_view_tilt_deg=15.0, target_m=[-gap / 2, 0.0, top_z])
+
+
+def v_groove_and_square_butt(
+    rng: np.random.Generator, *, thickness_m=None, included_angle_deg=None, root_gap_m=None,
+    root_face_m=None, square_gap_m=None, separation_m=None, length_m=None, mount=None, yaw_deg=None,
+) -> SyntheticScene:
+    """A V-groove and a square butt in one plate row: three plates (6-8 mm thick, 150-220 mm
+    long along y) side by side, the first two joined by a single V (included angle 60-90 deg,
+    root gap 0-2 mm, root face 0.5-2 mm) along x = -separation / 2, the last two by square
+    edges 0.8-3 mm apart along x = +separation / 2, 70-100 mm between the seams; the outer
+    plates 50-70 mm wide. Seams: the V's and the gap's centre lines at the surface, torch
+    axis minus the plate normal; the camera looks at the middle between them."""
+    thickness = _draw(rng, thickness_m, 0.006, 0.008)
+    groove = _draw_groove(rng, included_angle_deg, root_gap_m, 0.002)
+    root_face = _draw(rng, root_face_m, 0.0005, 0.002)
+    gap = _draw(rng, square_gap_m, 0.0008, 0.003)
+    separation = _draw(rng, separation_m, 0.07, 0.10)
+    length = _draw(rng, length_m, 0.15, 0.22)
+    outer = [_draw(rng, None, 0.05, 0.07) for _ in range(2)]
+    v_x, butt_x, half = -separation / 2, separation / 2, length / 2
+    first = _plate_piece(thickness, [((-1.0, 0.0), -v_x + outer[0]), *_y_bounds(length)],
+                         [((v_x, 0.0), (-1.0, 0.0))], groove, root_face)
+    middle = _plate_piece(thickness, [((1.0, 0.0), butt_x - gap / 2), *_y_bounds(length)],
+                          [((v_x, 0.0), (1.0, 0.0))], groove, root_face)
+    last = _box([butt_x + gap / 2, -half, 0.0], [butt_x + gap / 2 + outer[1], half, thickness])
+    seams = [
+        _seam(_line([v_x, -half, thickness], [v_x, half, thickness]), -UP, "v_groove"),
+        _seam(_line([butt_x, -half, thickness], [butt_x, half, thickness]), -UP, "square_butt"),
+    ]
+    return _placed("v_groove_and_square_butt", [first, middle, last], seams, rng, mount, yaw_deg,
+                   target_m=[0.0, 0.0, thickness])
 
 
 def bevel(

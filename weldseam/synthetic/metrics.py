@@ -30,6 +30,8 @@ def evaluate(
         joined by straight segments, densified to path_step_m).
     mean_axis_error_deg: angle between each pose's z column and the torch axis of its
         nearest truth point.
+    kinds_matched: expected seams whose path (the one covering most of the seam, at least
+        half of it) names the seam's joint kind.
     Values that are undefined (no poses, or no visible truth) are NaN.
     """
     segments = [_visible_segments(s, v) for s, v in zip(scene.seams, scan.visible)]
@@ -50,6 +52,10 @@ def evaluate(
         if paths else np.empty((0, 3))
     )
     seam_coverage = [_coverage(*segments[k][:2], dense_path, match_radius_m) for k in expected]
+    kinds_matched = sum(
+        _covering_joint(segments[k][:2], paths, match_radius_m, path_step_m) == scene.seams[k].joint
+        for k in expected
+    )
     covered = sum(c * lengths[k] for c, k in zip(seam_coverage, expected))
     total = sum(lengths[k] for k in expected)
     return {
@@ -60,7 +66,16 @@ def evaluate(
         "max_position_error_m": float(position_error.max()) if len(position_error) else np.nan,
         "coverage": covered / total if total > 0 else np.nan,
         "mean_axis_error_deg": _mean(axis_error),
+        "kinds_matched": kinds_matched,
     }
+
+
+def _covering_joint(segment_ends, paths, radius_m: float, step_m: float) -> str | None:
+    """The joint kind of the path covering most of a seam's visible segments (start and end
+    arrays), if it covers at least half; else None."""
+    covered = [_coverage(*segment_ends, _densify(p.positions_m, p.closed, step_m), radius_m) for p in paths]
+    best = int(np.argmax(covered)) if covered else -1
+    return paths[best].joint if best >= 0 and covered[best] >= 0.5 else None
 
 
 def _mean(values: np.ndarray) -> float:
