@@ -231,6 +231,25 @@ def test_a_square_butt_wins_over_a_groove_that_measured_no_flank(monkeypatch, rn
     assert joints.fit_profile(u, w, PARAMS).kind == expected
 
 
+def test_a_gap_whose_far_wall_is_seen_beside_its_rim_need_not_be_wider_than_the_lattice_spacing():
+    """Seen obliquely, a gap's far wall stands at its rim, and voxels merge the wall's top into
+    the surface: its deeper points lie just beyond the rim. An opening with them is a gap when it
+    is the widest there; one with nothing seen must stand out of the lattice's own spacing."""
+    rng = np.random.default_rng(4)
+    seen = unseen = 0
+    for _ in range(40):
+        u = np.arange(-0.025, 0.025, 0.0008) + rng.normal(0, 0.00015, 63)  # a noisy voxel lattice
+        w = rng.normal(0, 0.0003, len(u))
+        u, w = square_gap(u, w, 0.0, 0.0006)
+        fit = fit_profile(u, w, PARAMS, {SQUARE_BUTT})
+        unseen += isinstance(fit, ProfileFit) and abs(fit.u) < 0.0006
+        wall_u, wall_w = 0.0005 + rng.uniform(0, 0.0008, 3), -np.array([0.002, 0.003, 0.004])
+        order = np.argsort(np.r_[u, wall_u])
+        fit = fit_profile(np.r_[u, wall_u][order], np.r_[w, wall_w][order], PARAMS, {SQUARE_BUTT})
+        seen += isinstance(fit, ProfileFit) and abs(fit.u) < 0.0006
+    assert seen >= 24 and unseen <= seen - 8  # counting only what lies between the rims: 18 and 16
+
+
 def test_a_models_outline_residual_is_the_median_distance_of_the_points_around_its_seam():
     u = np.linspace(-0.02, 0.02, 401)
     corner = np.abs(u)  # a 90-degree corner at the origin
