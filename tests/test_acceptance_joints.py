@@ -32,9 +32,7 @@ CRITERIA = {
 KNOWN_GAPS: dict[tuple[str, int], set[str]] = {
     ("lap", 0): {"position", "coverage"},
     ("lap", 2): {"coverage"},
-    ("square_butt", 1): {"count", "position", "coverage", "axis"},
     ("square_butt", 2): {"coverage"},
-    ("square_butt", 3): {"coverage"},
     ("outside_corner", 4): {"position", "coverage"},
     ("pipe_on_plate", 0): {"count", "position", "coverage"},
     ("pipe_on_plate", 1): {"position"},

@@ -185,6 +185,71 @@ def test_a_square_gap_is_found_where_the_pitch_is_as_wide_as_the_gap_but_not_els
     assert missed == 40 and found >= 36
 
 
+def oblique_square_gap(rng, gap):
+    """A square butt seen obliquely: the plates' surface (w = 0) with the gap |u| < gap / 2 unseen,
+    and its far wall (u = gap / 2) seen from the surface 4 mm down, the near wall hidden."""
+    u = np.arange(-0.025, 0.025, 0.0006) + rng.normal(0, 0.00005, 84)
+    w = rng.normal(0, 0.0003, len(u))
+    outside = np.abs(u) >= gap / 2
+    wall_w = np.arange(-0.0003, -0.004, -0.0005)
+    u, w = np.r_[u[outside], gap / 2 + rng.normal(0, 0.0001, len(wall_w))], np.r_[w[outside], wall_w]
+    order = np.argsort(u)
+    return u[order], w[order]
+
+
+def test_a_square_gap_with_one_wall_seen_is_a_square_butt_not_a_bevel_or_v():
+    """One square wall seen and the surface ending across the gap: a bevel or a V with a hidden wall
+    draws the same outline, but measured no flank; the square butt is the joint, at the gap's centre."""
+    rng = np.random.default_rng(5)
+    found = 0
+    for gap in (0.0012, 0.002, 0.003):
+        for _ in range(20):
+            fit = fit_profile(*oblique_square_gap(rng, gap), PARAMS)
+            found += fit.kind == SQUARE_BUTT and abs(fit.u) < 0.0004
+    assert found >= 0.6 * 60  # without the rule 40 %: the bevel with its wall hidden won
+
+
+@pytest.mark.parametrize("included_deg, ratio, expected", [
+    (None, 1.1, SQUARE_BUTT),  # no flank measured, as close: the square opening
+    (None, 1.3, V_GROOVE),  # no flank measured, but the square butt's outline clearly farther
+    (60.0, 1.1, V_GROOVE),  # a flank measured: the groove
+])
+def test_a_square_butt_wins_over_a_groove_that_measured_no_flank(monkeypatch, rng, included_deg, ratio, expected):
+    import weldseam.pipeline.joints as joints
+
+    u, w = profile(lambda u: 0 * u, rng, noise=0.0)
+
+    def model(kind, offset_m, geometry):
+        def fit(u, w, params):
+            outline = ((-1.0, offset_m), (1.0, offset_m))  # a line offset_m over the plate
+            return ProfileFit(kind, 0.0, 0.0, 0.0, -1.0, 0.0, geometry, outline)
+        return SimpleNamespace(KIND=kind, CENTRED=True, SPECIALISES=None, fit=fit)
+
+    groove = model(V_GROOVE, 0.0005, JointGeometry(opening_m=0.002, included_deg=included_deg))
+    square = model(SQUARE_BUTT, 0.0005 * ratio, JointGeometry(opening_m=0.002))
+    monkeypatch.setattr(joints, "MODELS", (groove, square))
+    assert joints.fit_profile(u, w, PARAMS).kind == expected
+
+
+def test_a_gap_whose_far_wall_is_seen_beside_its_rim_need_not_be_wider_than_the_lattice_spacing():
+    """Seen obliquely, a gap's far wall stands at its rim, and voxels merge the wall's top into
+    the surface: its deeper points lie just beyond the rim. An opening with them is a gap when it
+    is the widest there; one with nothing seen must stand out of the lattice's own spacing."""
+    rng = np.random.default_rng(4)
+    seen = unseen = 0
+    for _ in range(40):
+        u = np.arange(-0.025, 0.025, 0.0008) + rng.normal(0, 0.00015, 63)  # a noisy voxel lattice
+        w = rng.normal(0, 0.0003, len(u))
+        u, w = square_gap(u, w, 0.0, 0.0006)
+        fit = fit_profile(u, w, PARAMS, {SQUARE_BUTT})
+        unseen += isinstance(fit, ProfileFit) and abs(fit.u) < 0.0006
+        wall_u, wall_w = 0.0005 + rng.uniform(0, 0.0008, 3), -np.array([0.002, 0.003, 0.004])
+        order = np.argsort(np.r_[u, wall_u])
+        fit = fit_profile(np.r_[u, wall_u][order], np.r_[w, wall_w][order], PARAMS, {SQUARE_BUTT})
+        seen += isinstance(fit, ProfileFit) and abs(fit.u) < 0.0006
+    assert seen >= 24 and unseen <= seen - 8  # counting only what lies between the rims: 18 and 16
+
+
 def test_a_models_outline_residual_is_the_median_distance_of_the_points_around_its_seam():
     u = np.linspace(-0.02, 0.02, 401)
     corner = np.abs(u)  # a 90-degree corner at the origin

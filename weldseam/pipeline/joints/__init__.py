@@ -30,6 +30,13 @@ MAX_OUTLINE_RESIDUAL_M = 0.0015
 # as well (noise decides between them): a single bevel whose bevel wall is seen is also a V-groove
 # with its square wall hidden, and the V-groove's outline follows the bevel within the noise.
 TIE_FRACTION = 0.2
+# A groove fitted without a measured flank (no wall slope seen: geometry.included_deg None) says
+# no more of the section than an opening with square sides does: seen obliquely, a square butt's
+# gap shows one square wall, and a V-groove or a bevel with its other wall hidden draws the same
+# outline. The square butt, which also needs the two faces coplanar and the opening clean, is the
+# joint when its outline lies within TIE_FRACTION of such a fit's.
+SQUARE_OPENING = JointKind.SQUARE_BUTT
+FLANKED = frozenset({JointKind.V_GROOVE, JointKind.BEVEL})
 
 
 def fit_profile(
@@ -40,7 +47,8 @@ def fit_profile(
     one whose outline lies closest to the profile's points around its seam (outline_residual,
     within face_radius_m + half its opening) is the joint, its residual_m that distance; on a tie,
     the first in MODELS. A fit of a kind that SPECIALISES the closest one's kind, within
-    TIE_FRACTION of its residual, is the joint instead: it says more of the same points."""
+    TIE_FRACTION of its residual, is the joint instead: it says more of the same points; so is a
+    square butt fit against a V-groove or bevel that measured no flank (see SQUARE_OPENING)."""
     if len(u) < MIN_PROFILE_POINTS:
         return NoFit("too few points in the section")
     order = np.argsort(u, kind="stable")
@@ -62,9 +70,17 @@ def fit_profile(
     if not fits:
         return NoFit("; ".join(reasons))
     closest = min(fits, key=lambda fit: fit.residual_m)
-    special = [fit for fit in fits if _specialises(fit.kind, closest.kind)
+    special = [fit for fit in fits if _says_more(fit, closest)
                and fit.residual_m <= closest.residual_m * (1 + TIE_FRACTION)]  # fmt: skip
     return min(special, key=lambda fit: fit.residual_m) if special else closest
+
+
+def _says_more(fit: ProfileFit, closest: ProfileFit) -> bool:
+    """Whether `fit` explains the section better than `closest` when as close to its points: a
+    special case of its kind, or a square opening against a groove without a measured flank."""
+    if _specialises(fit.kind, closest.kind):
+        return True
+    return fit.kind == SQUARE_OPENING and closest.kind in FLANKED and closest.geometry.included_deg is None
 
 
 def recentred(kind: JointKind) -> bool:

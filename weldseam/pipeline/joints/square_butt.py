@@ -7,11 +7,14 @@ joints.gap_min_m <= u_right - u_left <= joints.gap_max_m. What lies between them
 dropout along the gap) or lies deeper than the surface (the table or the far side seen through the
 gap, its walls), never above it. It is the widest opening between neighbouring surface points
 within `face_radius_m` (a wider one beside it is the joint: a groove's opening, with a wall's
-points just inside it), and an empty one at least UNIQUE_RATIO x as wide as any other there: one
+points just inside it), and one through which nothing deeper was seen (no deeper point within
+SEEN_THROUGH_M of it) at least UNIQUE_RATIO x as wide as any other there: one
 pixel lattice leaves openings of one pitch everywhere on a plate (on our own scenes, 1.3-3 mm gaps
 seen from 0.4-0.7 m, sections within 0.7 mm of the gap fit 70 % of the time, random sections on
 plain surfaces 3.4 %; the trace needs most sections of a chain to agree, and consistent seam
-points). The two sides each hold a
+points). Counting what was seen just beside the rims raised the sections on the gap that fit,
+in the broad world's noisy scans, from 55 to 87 % (square_butt_3) and from 46 to 64 %
+(square_butt_2), and left random sections on flat plates at 0.7-4 %. The two sides each hold a
 plate surface, and lines fitted to them agree (one plane: a step or a bend is no gap).
 
 The seam point is the opening's centre on the reference line, u = (u_left + u_right) / 2; the
@@ -48,6 +51,10 @@ SIDE_EXTENT = 0.5
 # between two faces is no gap).
 COPLANAR_M = 0.001
 COPLANAR_RAD = np.radians(8.0)
+# Deeper points within this of an opening's rims were seen through it: seen obliquely, the gap's
+# far wall stands at one rim, and the fine cloud's 1 mm voxels merge its top with the surface
+# beside it, so its deeper points lie up to a voxel beyond the rim rather than between the rims.
+SEEN_THROUGH_M = 0.001
 
 
 def fit(u: np.ndarray, w: np.ndarray, params: JointsConfig) -> ProfileFit | NoFit:
@@ -99,7 +106,15 @@ def _opening(u, residual, on_surface, params: JointsConfig):
             continue
         others = np.abs(middle - middle[k]) <= params.face_radius_m
         others[k] = False
-        ratio = 1.0 if right - left > 1 else UNIQUE_RATIO
+        ratio = 1.0 if _seen_through(u, residual, on_surface, left, right) else UNIQUE_RATIO
         if spacing[k] >= ratio * spacing[others].max(initial=0.0):
             return float(u[left]), float(u[right])
     return NoFit("no opening of joints.gap_min_m..gap_max_m in the surface")
+
+
+def _seen_through(u, residual, on_surface, left: int, right: int) -> bool:
+    """Whether points deeper than the surface lie within SEEN_THROUGH_M of the opening between
+    the surface points `left` and `right` (indices): what the camera saw through it."""
+    deep = ~on_surface & (residual < 0)
+    near = (u >= u[left] - SEEN_THROUGH_M) & (u <= u[right] + SEEN_THROUGH_M)
+    return bool(np.any(deep & near))
