@@ -12,7 +12,7 @@ from weldseam.pipeline.section import FineSurface, section_params
 from weldseam.pipeline.slots import in_line_seams, sides_turn_deg, slot
 from weldseam.pipeline.trace import TracedSeam
 
-REACH_M = PlanConfig().joints.face_radius_m
+REACH_M = PlanConfig().section.half_width_m
 
 
 def slot_height(x, turn_deg, width=0.005):
@@ -70,3 +70,25 @@ def test_a_corner_between_turned_faces_is_no_butt_joint_and_is_kept(rng):
     """A fillet's faces turn by its included angle: the rule reads butt joints only."""
     seam = seam_along_slot(JointKind.FILLET)
     assert not slot(seam, slot_surface(rng, 25.0), REACH_M)
+
+
+def test_a_clamp_post_beside_a_block_gives_no_seam_and_the_groove_is_kept():
+    """The project's own broad-world block with a V-groove (block_groove, seed 1) has a clamp on its
+    top whose post stands a few mm beside the block: the slot between them was a second, 25 mm
+    V-groove. Now the one path is the groove, and the candidate rejected as a slot lies at the post."""
+    from weldseam.pipeline.candidates import Rejection
+    from weldseam.pipeline.run import run_steps
+    from weldseam.synthetic.catalog import draw_case
+    from weldseam.types import Scan
+
+    scene, scan = draw_case("block_groove", 1, broad=True)
+    state = run_steps(Scan(points_m=scan.points_m, camera_origin_m=scan.camera_origin_m, source="block_groove_1"),
+                      PlanConfig(), last="split")  # fmt: skip
+    truth = cKDTree(np.vstack([seam.points_m for seam in scene.seams]))
+    assert len(state.seams) == 1 and np.median(truth.query(state.seams[0].positions_m)[0]) < 0.0005
+    slots = [np.array(c.centre_m) for c in state.chain_candidates if c.rejection == Rejection.SLOT]
+    assert slots
+    for centre in slots:
+        gaps = [np.linalg.norm(np.maximum(0.0, np.maximum(f.bounds[0] - centre, centre - f.bounds[1])))
+                for f in scene.fixtures]  # fmt: skip
+        assert min(gaps) < 0.01  # beside a fixture (the clamp's post)

@@ -5,7 +5,9 @@ the groove's two edges turn by a few degrees at most (welding distortion). A cla
 3-8 mm beside a block, or a bar lying against a part, leaves a slot between two faces at any angle
 to each other, which a section fits as a groove over a few cross-sections. Along a real groove a
 few sections turn too (where another groove meets it, or a plate's edge enters the window), so the
-rule reads the whole seam: most of its sections must see the sides in line.
+rule reads the whole seam: most of its sections must see the sides in line. Each side is read
+across the whole section window (section.half_width_m): over 20 mm a slope is measured within a
+few degrees in a noisy scan, over the 12 mm that set the torch axis only within ~10.
 """
 
 from __future__ import annotations
