@@ -181,6 +181,9 @@ class SplitConfig:
     junction_m: float = _param(0.0125, "a seam end this close to another seam's interior is a junction on it")
     min_branch_m: float = _param(0.015, "a piece shorter than this is no branch and splits nothing")
     min_seam_length_m: float = _param(0.02, "seams shorter than this are dropped")
+    min_inferred_length_m: float = _param(
+        0.05, "a seam with no clean fit of its sections (only one face seen, rough, bridged) shorter than this is dropped"
+    )
 
 
 @dataclass(frozen=True)

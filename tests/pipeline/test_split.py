@@ -43,3 +43,19 @@ def test_a_seam_shorter_than_its_kinds_shortest_is_dropped(kind):
     assert [seam.joint for seam in kept] == [JointKind.V_GROOVE]
     long_one = split_seams([piece(line([0, 0, 0], [0.06, 0, 0]), kind)], [], SplitConfig(), step_m=0.002)
     assert len(long_one) == 1
+
+
+@pytest.mark.parametrize("flag", [PointFlag.ONE_FACE, PointFlag.ROUGH, PointFlag.ONE_FACE | PointFlag.ROUGH])
+def test_a_short_seam_with_no_clean_fit_is_dropped(flag):
+    """A 26 mm corner whose every section saw one face only (a tall clamp's shadow edge), or fitted
+    roughly (a clamp's jaw), is inferred, not measured: dropped. One clean section measures it, and
+    a 60 mm one runs on as a part's edge does: both kept."""
+    short = piece(line([0, 0, 0], [0.026, 0, 0]), JointKind.FILLET)
+    inferred = np.full(len(short.positions_m), flag, np.uint8)
+    assert split_seams([replace(short, flags=inferred)], [], SplitConfig(), step_m=0.002) == []
+    one_clean = inferred.copy()
+    one_clean[len(one_clean) // 2] = 0
+    assert len(split_seams([replace(short, flags=one_clean)], [], SplitConfig(), step_m=0.002)) == 1
+    long_one = piece(line([0, 0, 0], [0.06, 0, 0]), JointKind.FILLET)
+    long_flags = np.full(len(long_one.positions_m), flag, np.uint8)
+    assert len(split_seams([replace(long_one, flags=long_flags)], [], SplitConfig(), step_m=0.002)) == 1

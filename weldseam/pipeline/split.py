@@ -4,6 +4,12 @@ Fragments that joined nothing are noise, and a piece too short to be a seam is n
 are dropped before splitting (one would be dropped after splitting a real seam). A seam is split
 where another seam ends on its interior; the pieces each carry the holes in the scan whose middle
 lies on them.
+
+A seam none of whose sections was a clean fit (every point rests on a corner with one face unseen,
+a rough outline, a bridge or an interpolation: section.PointFlag) is inferred, never measured: the
+edge of a tall object's shadow passes for a corner with its wall unseen, and a clamp's jaw or a
+bar's end gives rough fits over its 20-40 mm. Such a seam is kept only when it runs on as a part's
+edge does, over split.min_inferred_length_m.
 """
 
 from __future__ import annotations
@@ -22,12 +28,14 @@ from weldseam.pipeline.trace import Hole, TracedSeam
 def split_seams(seams: list[TracedSeam], holes: list[Hole], params: SplitConfig, step_m: float) -> list[TracedSeam]:
     """The seams without fragments, split at junctions, each seen over min_seam_length_m (what was
     interpolated across holes does not count), no shorter than its kind's shortest seam
-    (joints.min_length_m), and with the holes whose middle lies within `step_m`
-    (the spacing of the points bridged across them) of one of its points."""
+    (joints.min_length_m), clean somewhere or no shorter than min_inferred_length_m (see the
+    module's docstring), and with the holes whose middle lies within `step_m` (the spacing of the
+    points bridged across them) of one of its points."""
     seams = [seam for seam in seams if seam.length_m >= max(params.min_branch_m, params.min_seam_length_m)]
     seams = split_at_junctions(seams, tolerance_m=params.junction_m)
     return [_with_holes(seam, holes, step_m) for seam in seams
-            if seen_length(seam) >= params.min_seam_length_m and seam.length_m >= min_length_m(seam.joint)]
+            if seen_length(seam) >= params.min_seam_length_m and seam.length_m >= min_length_m(seam.joint)
+            and (measured(seam) or seam.length_m >= params.min_inferred_length_m)]
 
 
 def seen_length(seam: TracedSeam) -> float:
@@ -37,6 +45,11 @@ def seen_length(seam: TracedSeam) -> float:
     seen = (flags & PointFlag.INTERPOLATED) == 0
     steps = np.linalg.norm(np.diff(points, axis=0), axis=1)
     return float(steps[seen[:-1] & seen[1:]].sum())
+
+
+def measured(seam: TracedSeam) -> bool:
+    """Whether any point of the seam rests on a clean fit of its section (no PointFlag bit)."""
+    return bool(np.any(seam.point_flags == 0))
 
 
 def split_at_junctions(seams: list[TracedSeam], *, tolerance_m: float) -> list[TracedSeam]:
