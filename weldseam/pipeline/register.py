@@ -71,6 +71,15 @@ class _Step(NamedTuple):
     open_motions: OpenMotions
 
 
+class _Aligned(NamedTuple):
+    """What ICP aligns, per frame: sources (point, normal, area), targets (point, plane, normal)
+    and a search tree over the target points."""
+
+    sources: list
+    targets: list
+    trees: list
+
+
 class _Pairs(NamedTuple):
     """Paired patches of one frame a (source) with another frame b (target), placed."""
 
@@ -86,22 +95,20 @@ class _Pairs(NamedTuple):
 def register(surfaces: list[Surface], reach_m: float, fine_m: float, min_overlap: float) -> Registration:
     """Joint point-to-plane ICP of all frames but the first (see merge_frames)."""
     count = len(surfaces)
-    targets = [(s.point, s.plane, s.normal) for s in surfaces]
-    sources = [(s.point, s.normal, s.area_m2) for s in surfaces]
-    trees = [cKDTree(point, balanced_tree=False) for point, _, _ in targets]
+    aligned = _aligned(surfaces)
     identity = np.tile(np.eye(4), (count, 1, 1))
     taking = np.ones(count, dtype=bool)
-    overlap = _overlap(_pair(sources, targets, trees, identity, taking, reach_m), sources)
+    overlap = _overlap(_pair(aligned, identity, taking, reach_m), aligned.sources)
     overlap[0] = 1.0
     taking = overlap >= min_overlap
     free = np.flatnonzero(taking[1:]) + 1
     if len(free) == 0:
         return Registration(identity, overlap, taking & False, True, np.zeros(count, dtype=int))
-    settled = _settle(sources, targets, trees, identity, taking, free, (reach_m, fine_m), None)
+    settled = _settle(aligned, identity, taking, free, (reach_m, fine_m), None)
     if settled is None:
         return Registration(identity, overlap, np.zeros(count, dtype=bool), False, np.zeros(count, dtype=int))
     corrections, reach, last = settled
-    final = _overlap(_pair(sources, targets, trees, corrections, taking, reach), sources)
+    final = _overlap(_pair(aligned, corrections, taking, reach), aligned.sources)
     overlap[free] = final[free]
     refined = np.zeros(count, dtype=bool)
     refined[free] = True
@@ -123,12 +130,9 @@ def register_open(registration: Registration, edges: list[Surface], reach_m: flo
     free = np.flatnonzero(registration.refined)
     taking = registration.refined.copy()
     taking[0] = True
-    targets = [(e.point, e.plane, e.normal) for e in edges]
-    sources = [(e.point, e.normal, e.area_m2) for e in edges]
-    trees = [cKDTree(point, balanced_tree=False) if len(point) else None for point, _, _ in targets]
-    if any(tree is None for tree, take in zip(trees, taking) if take):
+    if any(len(e.point) == 0 for e, take in zip(edges, taking) if take):
         return registration
-    settled = _settle(sources, targets, trees, registration.corrections, taking, free, (reach_m, fine_m), open_motions)
+    settled = _settle(_aligned(edges), registration.corrections, taking, free, (reach_m, fine_m), open_motions)
     if settled is None:
         return registration
     corrections, _, last = settled
@@ -141,7 +145,14 @@ def register_open(registration: Registration, edges: list[Surface], reach_m: flo
     return registration._replace(corrections=corrections, undetermined=undetermined, open_motions=last.open_motions)
 
 
-def _settle(sources, targets, trees, start: np.ndarray, taking, free, reaches: tuple, open_motions):
+def _aligned(surfaces: list[Surface]) -> _Aligned:
+    """The frames' Surfaces as ICP reads them, each with a search tree."""
+    targets = [(s.point, s.plane, s.normal) for s in surfaces]
+    return _Aligned([(s.point, s.normal, s.area_m2) for s in surfaces], targets,
+                    [cKDTree(point, balanced_tree=False) for point, _, _ in targets])
+
+
+def _settle(aligned: _Aligned, start: np.ndarray, taking, free, reaches: tuple, open_motions):
     """Gauss-Newton steps of the `free` frames from corrections `start` (within `open_motions`
     when given) at a reach that halves from reaches[0] to reaches[1], until a step at the finest
     reach moves every paired point by less than CONVERGED_M: (corrections, reach, last _Step),
@@ -150,7 +161,7 @@ def _settle(sources, targets, trees, start: np.ndarray, taking, free, reaches: t
     reach, fine_m = reaches
     last = None
     for _ in range(MAX_ITERATIONS):
-        step = _joint_step(_pair(sources, targets, trees, corrections, taking, reach), free, reach, open_motions)
+        step = _joint_step(_pair(aligned, corrections, taking, reach), free, reach, open_motions)
         if step is None:
             break
         last = step
@@ -166,11 +177,12 @@ def _settle(sources, targets, trees, start: np.ndarray, taking, free, reaches: t
     return None
 
 
-def _pair(sources, targets, trees, corrections, taking, reach_m) -> list[_Pairs]:
+def _pair(aligned: _Aligned, corrections, taking, reach_m) -> list[_Pairs]:
     """Every ordered pair of distinct frames that take part: each source patch of one with
     the nearest target patch of the other within `reach_m` whose normal agrees (both placed
     by `corrections`)."""
     min_cosine = np.cos(np.radians(MAX_NORMAL_ANGLE_DEG))
+    sources, targets, trees = aligned
     pairs = []
     for a in np.flatnonzero(taking):
         point = transform_points(corrections[a], sources[a][0])
