@@ -15,6 +15,10 @@ import numpy as np
 
 from weldseam.geometry import unit
 
+# A scan's bins fill a box little larger than its point count; an outlier at a wide angle may
+# stretch the box, and past this many bins per point the buffer is built by sorting instead.
+MAX_DENSE_BINS_PER_POINT = 8
+
 
 @dataclass(frozen=True, eq=False)
 class ViewBuffer:
@@ -43,9 +47,12 @@ class ViewBuffer:
         bin_rad = spacing_m / float(np.median(ranges))
         cells = _cells(offsets, frame, bin_rad)
         keys = _keys(cells)
-        order = np.lexsort((ranges, keys))
-        first = np.r_[True, keys[order][1:] != keys[order][:-1]]
-        return cls(camera_m, points, frame, bin_rad, keys[order][first], order[first])
+        nearest = _nearest_per_bin(cells, ranges)
+        if nearest is None:
+            order = np.lexsort((ranges, keys))
+            first = np.r_[True, keys[order][1:] != keys[order][:-1]]
+            nearest = order[first]
+        return cls(camera_m, points, frame, bin_rad, keys[nearest], nearest)
 
     def nearer_than(self, queries: np.ndarray, margin_m: float) -> np.ndarray:
         """(Q,) index of the nearest scan point seen in the direction of each query (its bin and the
@@ -53,17 +60,16 @@ class ViewBuffer:
         offsets = queries - self.camera_m
         ranges = np.linalg.norm(offsets, axis=1)
         cells = _cells(offsets, self.frame, self.bin_rad)
-        best = np.full(len(queries), -1)
-        best_range = np.full(len(queries), np.inf)
-        for du in (-1, 0, 1):
-            for dv in (-1, 0, 1):
-                keys = _keys(cells + [du, dv])
-                slot = np.clip(np.searchsorted(self.keys, keys), 0, len(self.keys) - 1)
-                hit = self.keys[slot] == keys
-                index = np.where(hit, self.nearest[slot], -1)
-                found = np.where(hit, np.linalg.norm(self.points[index] - self.camera_m, axis=1), np.inf)
-                better = found < best_range
-                best, best_range = np.where(better, index, best), np.where(better, found, best_range)
+        around = np.array([[du, dv] for du in (-1, 0, 1) for dv in (-1, 0, 1)])
+        keys = _keys((cells[None] + around[:, None]).reshape(-1, 2))
+        slot = np.clip(np.searchsorted(self.keys, keys), 0, len(self.keys) - 1)
+        hit = self.keys[slot] == keys
+        index = np.where(hit, self.nearest[slot], -1).reshape(9, -1)
+        found = np.where(hit, np.linalg.norm(self.points[index.ravel()] - self.camera_m, axis=1), np.inf).reshape(9, -1)
+        # The first of the nine bins whose point is nearest (argmin: the first of equals).
+        pick = np.argmin(found, axis=0)
+        columns = np.arange(len(queries))
+        best, best_range = index[pick, columns], found[pick, columns]
         return np.where(best_range <= ranges - margin_m, best, -1)
 
 
@@ -72,6 +78,25 @@ def _cells(offsets: np.ndarray, frame: np.ndarray, bin_rad: float) -> np.ndarray
     local = offsets @ frame.T
     angles = local[:, :2] / np.maximum(local[:, 2:3], 1e-9)
     return np.floor(np.arctan(angles) / bin_rad).astype(np.int64)
+
+
+def _nearest_per_bin(cells: np.ndarray, ranges: np.ndarray) -> np.ndarray | None:
+    """(K,) index of the nearest point (least range, then lowest index) in each occupied bin, bins
+    in the order of their keys; by a dense array over the bins' bounding box, without sorting (None
+    when that box holds more than MAX_DENSE_BINS_PER_POINT bins per point: sort instead)."""
+    low = cells.min(axis=0)
+    span = cells.max(axis=0) - low + 1
+    bins = int(span[0]) * int(span[1])
+    if bins > MAX_DENSE_BINS_PER_POINT * len(cells):
+        return None
+    # Row-major over (u, v), as _keys orders them.
+    dense = (cells[:, 0] - low[0]) * span[1] + (cells[:, 1] - low[1])
+    least = np.full(bins, np.inf)
+    np.minimum.at(least, dense, ranges)
+    tied = np.flatnonzero(ranges == least[dense])
+    first = np.full(bins, len(cells))
+    np.minimum.at(first, dense[tied], tied)
+    return first[first < len(cells)]
 
 
 def _keys(cells: np.ndarray) -> np.ndarray:
