@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from weldseam.geometry import unit
-from weldseam.pipeline.joints.robust import line, noise
+from weldseam.pipeline.joints.robust import fraction, line, mean, noise, quantile
 
 # A break leaves at least this many points on each side.
 MIN_FACE_POINTS = 5
@@ -118,7 +118,7 @@ def fit_face(u: np.ndarray, w: np.ndarray, origin: tuple[float, float], side: fl
     residual = w - _evaluate(_parabola(t, w), t)
     inliers = np.abs(residual) <= max(3 * noise(residual), MIN_INLIER_BAND_M)
     count = np.count_nonzero(inliers)
-    if inliers.mean() < INLIER_FRACTION or count < MIN_FACE_POINTS:
+    if fraction(inliers) < INLIER_FRACTION or count < MIN_FACE_POINTS:
         return None
     intercept, slope = line(t[inliers], w[inliers])
     line_error = float(np.sum((w[inliers] - intercept - slope * t[inliers]) ** 2))
@@ -157,7 +157,7 @@ def _on_face(distance: np.ndarray, near: np.ndarray) -> bool:
     """Whether INLIER_FRACTION of the signed distances (m) to a face lie within max(3 x the robust
     noise of the `near` ones, MIN_INLIER_BAND_M)."""
     band = max(3 * noise(distance[near]), MIN_INLIER_BAND_M)
-    return bool(np.quantile(np.abs(distance), INLIER_FRACTION) <= band)
+    return bool(quantile(np.abs(distance), INLIER_FRACTION) <= band)
 
 
 def _circle(u: np.ndarray, w: np.ndarray, iterations: int = 4) -> tuple[float, float, float] | None:
@@ -195,7 +195,7 @@ def _line_inliers(t, w) -> np.ndarray | None:
     intercept, slope = line(t, w)
     residual = w - intercept - slope * t
     inliers = np.abs(residual) <= max(3 * noise(residual), MIN_INLIER_BAND_M)
-    if inliers.mean() < INLIER_FRACTION or np.count_nonzero(inliers) < MIN_FACE_POINTS:
+    if fraction(inliers) < INLIER_FRACTION or np.count_nonzero(inliers) < MIN_FACE_POINTS:
         return None
     return inliers
 
@@ -242,8 +242,9 @@ def _bends_away(u: np.ndarray, w: np.ndarray) -> bool:
     below zero, explaining them CURVED_F better than a line."""
     intercept, slope = line(u, w)
     line_error = float(np.sum((w - intercept - slope * u) ** 2))
-    curve = _parabola(u - u.mean(), w)
-    curve_error = float(np.sum((w - _evaluate(curve, u - u.mean())) ** 2))
+    centred = u - mean(u)
+    curve = _parabola(centred, w)
+    curve_error = float(np.sum((w - _evaluate(curve, centred)) ** 2))
     significant = (line_error - curve_error) * (len(u) - 3) > CURVED_F * max(curve_error, 1e-18)
     return bool(significant and curve[2] < 0)
 
@@ -264,7 +265,8 @@ def _parabola(s: np.ndarray, n: np.ndarray) -> np.ndarray:
     """(c0, c1, c2) of the least-squares parabola n = c0 + c1 s + c2 s^2."""
     scale = max(float(np.abs(s).max()), 1e-9)
     x = s / scale
-    design = np.column_stack([np.ones_like(x), x, x * x])
+    design = np.empty((len(x), 3))
+    design[:, 0], design[:, 1], design[:, 2] = 1.0, x, x * x
     solution = np.linalg.lstsq(design, n, rcond=None)[0]
     return solution / np.array([1.0, scale, scale * scale])
 
