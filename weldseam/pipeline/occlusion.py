@@ -13,7 +13,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from weldseam.config import PlanConfig
 from weldseam.geometry import unit
+from weldseam.pipeline.boundary import inward_shift
+from weldseam.pipeline.one_face import PAST_END_M
 
 # A scan's bins fill a box little larger than its point count; an outlier at a wide angle may
 # stretch the box, and past this many bins per point the buffer is built by sorting instead.
@@ -102,6 +105,17 @@ def _nearest_per_bin(cells: np.ndarray, ranges: np.ndarray) -> np.ndarray | None
 def _keys(cells: np.ndarray) -> np.ndarray:
     """One int64 per bin (both angles well within +-2^30 bins)."""
     return cells[:, 0] * (1 << 32) + (cells[:, 1] + (1 << 31))
+
+
+def occluded_ends(points: np.ndarray, normals: np.ndarray, graph, view: ViewBuffer, params: PlanConfig) -> np.ndarray:
+    """(N,) True for the rims of the working surface (`points`, `normals`, their neighbourhood
+    `graph` within boundary.radius_m) past whose end the camera sees a wall's top (occluded_rims):
+    where a T-joint's flange meets a web whose face is too oblique to be seen."""
+    shift = inward_shift(points, normals, graph)
+    return occluded_rims(
+        points, shift, view, min_shift_m=params.boundary.shift_ratio * params.boundary.radius_m, past_m=PAST_END_M,
+        margin_m=params.joints.fillet_min_leg_m,
+    )
 
 
 def occluded_rims(points: np.ndarray, shift: np.ndarray, view: ViewBuffer, *, min_shift_m: float,

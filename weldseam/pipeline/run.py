@@ -30,7 +30,6 @@ from weldseam.pipeline import (
     join,
     normals,
     occlusion,
-    one_face,
     order,
     pairing,
     probe,
@@ -79,6 +78,9 @@ def _condition(state: PlanState, c: PlanConfig) -> None:
     state.working = working
     state.graphs = {c.normals.radius_m: pairs_graph(pairs, len(working))}
     state.camera, state.working_camera = normals.camera_origins(scan, working, state.warnings)
+    if c.segment.occluded_ends and scan.camera_origin_m is not None and state.camera.ndim == 1:
+        # One camera: segment seeks occluded ends in the view buffer, built on the other core meanwhile.
+        state.view_build = in_background(occlusion.ViewBuffer.build, state.fine, state.camera, c.condition.voxel_m)
     state.dump("condition", state.fine, None)
 
 
@@ -123,8 +125,11 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
             found, too_short = _clusters(state, c, segment.dense_selection(graph, side, c.segment.min_density))
             state.creases += found
             short += too_short
-    if c.segment.occluded_ends and state.scan.camera_origin_m is not None and state.camera.ndim == 1:
-        found, too_short = _clusters(state, c, _occluded_ends(state, c))
+    if state.view_build is not None:  # the view buffer is kept for the sections (one_face)
+        state.view = state.view_build.result()
+        rims = occlusion.occluded_ends(state.working, state.normals, state.neighbourhoods(c.boundary.radius_m),
+                                       state.view, c)  # fmt: skip
+        found, too_short = _clusters(state, c, rims)
         state.creases += found
         short += too_short
     state.short_candidates = [replace(candidates.cluster_candidate(state.working[members]), rejection=Rejection.TOO_SHORT)
@@ -132,18 +137,6 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
     state.working_tree = cKDTree(state.working)
     chosen = [*state.clusters, *state.creases]
     state.dump("segment", state.working[np.concatenate(chosen)] if chosen else np.empty((0, 3)), None)
-
-
-def _occluded_ends(state: PlanState, c: PlanConfig) -> np.ndarray:
-    """The rims of surfaces past whose end the camera sees a wall's top (occlusion.occluded_rims):
-    where a T-joint's flange meets a web whose face is too oblique to be seen. The view buffer is
-    kept for the sections (one_face)."""
-    state.view = occlusion.ViewBuffer.build(state.fine, state.camera, c.condition.voxel_m)
-    shift = boundary.inward_shift(state.working, state.normals, state.neighbourhoods(c.boundary.radius_m))
-    return occlusion.occluded_rims(
-        state.working, shift, state.view, min_shift_m=c.boundary.shift_ratio * c.boundary.radius_m,
-        past_m=one_face.PAST_END_M, margin_m=c.joints.fillet_min_leg_m,
-    )
 
 
 def _crease_threshold(c: PlanConfig, variant: str) -> float:
