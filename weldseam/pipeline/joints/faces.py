@@ -100,7 +100,8 @@ def best_break(u: np.ndarray, w: np.ndarray) -> Break | None:
     columns = [np.ones(n), x, x2, x2 * x, x2 * x2, w, x * w, x2 * w, w * w]
     sums = np.cumsum(np.column_stack(columns), axis=0)
     left = sums[splits - 1]
-    error = _parabola_error(left) + _parabola_error(sums[-1] - left)
+    both = _parabola_error(np.concatenate([left, sums[-1] - left]))  # one batch: each row solved alone
+    error = both[: len(splits)] + both[len(splits) :]
     best = int(np.argmin(error))
     index = int(splits[best])
     return Break(index, float(u[index]), float(w[index]), float(max(error[best], 0.0)))
@@ -278,8 +279,8 @@ def _evaluate(coefficients: np.ndarray, s: np.ndarray) -> np.ndarray:
 def _parabola_error(sums: np.ndarray) -> np.ndarray:
     """Residual sum of squares of the least-squares parabola through each segment, from its sums
     (rows: 1, x, x^2, x^3, x^4, w, xw, x^2w, w^2): sum w^2 - b^T A^-1 b (normal equations A c = b)."""
-    s0, s1, s2, s3, s4, sw, sxw, sx2w, sww = sums.T
-    normal = np.stack([np.stack([s0, s1, s2], -1), np.stack([s1, s2, s3], -1), np.stack([s2, s3, s4], -1)], -2)
-    normal += np.eye(3) * (1e-12 * s0)[:, None, None]  # a segment whose points share one u
-    b = np.stack([sw, sxw, sx2w], -1)
-    return sww - np.einsum("ij,ij->i", b, np.linalg.solve(normal, b[..., None])[..., 0])
+    # normal[:, i, j] = sum of x^(i + j) (columns 0-4 of the sums); b = sums of w, x w, x^2 w.
+    normal = sums[:, np.add.outer(np.arange(3), np.arange(3))]
+    normal += np.eye(3) * (1e-12 * sums[:, 0])[:, None, None]  # a segment whose points share one u
+    b = sums[:, 5:8]
+    return sums[:, 8] - np.einsum("ij,ij->i", b, np.linalg.solve(normal, b[..., None])[..., 0])
