@@ -78,9 +78,6 @@ def _condition(state: PlanState, c: PlanConfig) -> None:
     state.working = working
     state.graphs = {c.normals.radius_m: pairs_graph(pairs, len(working))}
     state.camera, state.working_camera = normals.camera_origins(scan, working, state.warnings)
-    if c.segment.occluded_ends and scan.camera_origin_m is not None and state.camera.ndim == 1:
-        # One camera: segment seeks occluded ends in the view buffer, built on the other core meanwhile.
-        state.view_build = in_background(occlusion.ViewBuffer.build, state.fine, state.camera, c.condition.voxel_m)
     state.dump("condition", state.fine, None)
 
 
@@ -125,8 +122,9 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
             found, too_short = _clusters(state, c, segment.dense_selection(graph, side, c.segment.min_density))
             state.creases += found
             short += too_short
-    if state.view_build is not None:  # the view buffer is kept for the sections (one_face)
-        state.view = state.view_build.result()
+    if c.segment.occluded_ends and state.scan.camera_origin_m is not None and state.camera.ndim == 1:
+        # One camera: rims past whose end it sees a wall's top; the view buffer is kept for one_face.
+        state.view = occlusion.ViewBuffer.build(state.fine, state.camera, c.condition.voxel_m)
         rims = occlusion.occluded_ends(state.working, state.normals, state.neighbourhoods(c.boundary.radius_m),
                                        state.view, c)  # fmt: skip
         found, too_short = _clusters(state, c, rims)

@@ -47,7 +47,6 @@ class PlanState:
     clusters: list = field(default_factory=list)
     creases: list = field(default_factory=list)
     view: occlusion.ViewBuffer | None = None
-    view_build: object = None  # the Future of `view` (condition starts it)
     working_tree: object = None
     support: tuple | None = None
     # boundary, pairing, thinning, grid, order
