@@ -226,7 +226,7 @@ def _probe(state: PlanState, c: PlanConfig) -> None:
     state.approx_axes = probe.approximate_torch_axes(
         [chain.points for chain in state.chains], state.normals, state.working_tree, c.joints.face_radius_m
     )
-    state.probes = probe.probe_chains(state.chains, state.approx_axes, state.surface)
+    state.probes = probe.probe_chains(state.chains, state.approx_axes, state.surface, min_length_m=c.grid.leaf_m)
 
 
 def _trace(state: PlanState, c: PlanConfig) -> None:
