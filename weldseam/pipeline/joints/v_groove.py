@@ -83,8 +83,9 @@ def surface_line(u: np.ndarray, w: np.ndarray, min_depth_m: float):
     The V-groove, the bevel and the square butt each start from the surface line of the same
     profile: the last one found is kept, for these very arrays (its own arrays read-only)."""
     global _last_surface
-    if _last_surface and _last_surface[0] is u and _last_surface[1] is w and _last_surface[2] == min_depth_m:
-        return _last_surface[3]
+    last = _last_surface  # read once: a fit on another thread may replace it meanwhile
+    if last and last[0] is u and last[1] is w and last[2] == min_depth_m:
+        return last[3]
     found = _surface_line(u, w, min_depth_m)
     if not isinstance(found, NoFit):
         for array in found[2:4]:
