@@ -292,3 +292,17 @@ def test_a_fit_whose_outline_lies_far_from_the_points_is_no_fit(monkeypatch, rng
     monkeypatch.setattr(joints, "MODELS", (SimpleNamespace(KIND=FILLET, CENTRED=False, SPECIALISES=None, fit=fit),))
     found = joints.fit_profile(u, w, PARAMS)
     assert isinstance(found, NoFit) and "outline lies" in found.reason
+
+
+def test_the_surface_line_is_shared_by_the_models_of_one_profile_only(rng):
+    """The V-groove, bevel and square butt models read one surface line per profile: the same
+    arrays give the very same (read-only) result, equal arrays of another profile their own."""
+    from weldseam.pipeline.joints.v_groove import surface_line
+
+    u, w = profile(v_groove(0.001), rng)
+    first = surface_line(u, w, 0.001)
+    assert surface_line(u, w, 0.001) is first
+    assert not first[2].flags.writeable and not first[3].flags.writeable
+    again = surface_line(u.copy(), w.copy(), 0.001)
+    assert again is not first and all(np.array_equal(a, b) for a, b in zip(again, first))
+    assert surface_line(u, w, 0.002) is not first

@@ -45,3 +45,19 @@ def test_only_the_flanges_end_under_a_wall_is_an_occluded_rim():
     assert rims[foot].mean() > 0.9
     assert not rims[on_flange & (points[:, 1] > 0.01)].any()  # not the flange's far edge, nor inside
     assert not rims[~on_flange].any()
+
+
+def test_the_dense_and_the_sorted_buffer_are_the_same(monkeypatch):
+    """Binned densely or sorted (an outlier stretching the bins' box), the buffer holds the same
+    nearest point per bin: the least range, the lowest index among equal ranges."""
+    rng = np.random.default_rng(3)
+    table = grid((-0.05, 0.05), (-0.05, 0.05), 0.0)
+    table = table + rng.normal(0.0, 0.0002, table.shape)
+    points = np.vstack([table, table[::7] + [0.0, 0.0, 0.02], table[::5]])  # tops, and exact repeats
+    dense = ViewBuffer.build(points, CAMERA, 0.001)
+    monkeypatch.setattr("weldseam.pipeline.occlusion.MAX_DENSE_BINS_PER_POINT", 0)
+    ordered = ViewBuffer.build(points, CAMERA, 0.001)
+    assert np.array_equal(dense.keys, ordered.keys) and np.array_equal(dense.nearest, ordered.nearest)
+    assert len(dense.keys) > 1000
+    repeated = np.arange(0, len(table), 5)
+    assert not np.isin(dense.nearest, len(table) + len(table[::7]) + np.arange(len(repeated))).any()

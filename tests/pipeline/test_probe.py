@@ -47,3 +47,22 @@ def test_a_chain_on_the_seam_is_traced_before_a_longer_one_along_its_edge(rng):
     assert all(fit.kind == JointKind.V_GROOVE for p in probes for fit in p.values())
     order = sorted(range(2), key=lambda k: tracing_order(chains[k], probes[k]))
     assert order == [1, 0]
+
+
+def test_a_chain_shorter_than_the_trace_takes_is_not_probed_and_the_others_probe_as_alone():
+    """A chain shorter than min_length_m (the trace rejects it as SHORT_CHAIN) gets no probe
+    sections; the chains beside it get the probes they get alone."""
+    x, y = grid((-0.07, 0.07), (-0.035, 0.035))
+    surface = surface_of(np.column_stack([x, y, -v_depth(y, half_open=0.008, depth=0.006)]))
+    down = [0.0, 0.0, -1.0]
+    on_seam = Chain(np.column_stack([np.arange(-0.04, 0.04, 0.0025), np.zeros(32), np.zeros(32)]), False)
+    speck = Chain(np.array([[0.01, 0.0, 0.0], [0.0105, 0.0, 0.0]]), False)  # 0.5 mm long
+    chains = [speck, on_seam]
+    axes = [np.tile(down, (len(c.points), 1)) for c in chains]
+    probes = probe_chains(chains, axes, surface, min_length_m=0.002)
+    alone = probe_chains([on_seam], axes[1:], surface, min_length_m=0.002)[0]
+    assert probes[0] == {}
+    assert sorted(probes[1]) == sorted(alone) == [0, 16, 31]
+    assert all(np.array_equal(probes[1][k].point_m, alone[k].point_m) for k in alone)
+    assert all(fit.kind == JointKind.V_GROOVE for fit in alone.values())
+    assert probe_chains([speck], axes[:1], surface, min_length_m=0.002) == [{}]

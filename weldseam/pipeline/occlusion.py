@@ -13,7 +13,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from weldseam.config import PlanConfig
 from weldseam.geometry import unit
+from weldseam.pipeline.boundary import inward_shift
+from weldseam.pipeline.one_face import PAST_END_M
+
+# A scan's bins fill a box little larger than its point count; an outlier at a wide angle may
+# stretch the box, and past this many bins per point the buffer is built by sorting instead.
+MAX_DENSE_BINS_PER_POINT = 8
 
 
 @dataclass(frozen=True, eq=False)
@@ -43,9 +50,12 @@ class ViewBuffer:
         bin_rad = spacing_m / float(np.median(ranges))
         cells = _cells(offsets, frame, bin_rad)
         keys = _keys(cells)
-        order = np.lexsort((ranges, keys))
-        first = np.r_[True, keys[order][1:] != keys[order][:-1]]
-        return cls(camera_m, points, frame, bin_rad, keys[order][first], order[first])
+        nearest = _nearest_per_bin(cells, ranges)
+        if nearest is None:
+            order = np.lexsort((ranges, keys))
+            first = np.r_[True, keys[order][1:] != keys[order][:-1]]
+            nearest = order[first]
+        return cls(camera_m, points, frame, bin_rad, keys[nearest], nearest)
 
     def nearer_than(self, queries: np.ndarray, margin_m: float) -> np.ndarray:
         """(Q,) index of the nearest scan point seen in the direction of each query (its bin and the
@@ -53,17 +63,16 @@ class ViewBuffer:
         offsets = queries - self.camera_m
         ranges = np.linalg.norm(offsets, axis=1)
         cells = _cells(offsets, self.frame, self.bin_rad)
-        best = np.full(len(queries), -1)
-        best_range = np.full(len(queries), np.inf)
-        for du in (-1, 0, 1):
-            for dv in (-1, 0, 1):
-                keys = _keys(cells + [du, dv])
-                slot = np.clip(np.searchsorted(self.keys, keys), 0, len(self.keys) - 1)
-                hit = self.keys[slot] == keys
-                index = np.where(hit, self.nearest[slot], -1)
-                found = np.where(hit, np.linalg.norm(self.points[index] - self.camera_m, axis=1), np.inf)
-                better = found < best_range
-                best, best_range = np.where(better, index, best), np.where(better, found, best_range)
+        around = np.array([[du, dv] for du in (-1, 0, 1) for dv in (-1, 0, 1)])
+        keys = _keys((cells[None] + around[:, None]).reshape(-1, 2))
+        slot = np.clip(np.searchsorted(self.keys, keys), 0, len(self.keys) - 1)
+        hit = self.keys[slot] == keys
+        index = np.where(hit, self.nearest[slot], -1).reshape(9, -1)
+        found = np.where(hit, np.linalg.norm(self.points[index.ravel()] - self.camera_m, axis=1), np.inf).reshape(9, -1)
+        # The first of the nine bins whose point is nearest (argmin: the first of equals).
+        pick = np.argmin(found, axis=0)
+        columns = np.arange(len(queries))
+        best, best_range = index[pick, columns], found[pick, columns]
         return np.where(best_range <= ranges - margin_m, best, -1)
 
 
@@ -74,9 +83,39 @@ def _cells(offsets: np.ndarray, frame: np.ndarray, bin_rad: float) -> np.ndarray
     return np.floor(np.arctan(angles) / bin_rad).astype(np.int64)
 
 
+def _nearest_per_bin(cells: np.ndarray, ranges: np.ndarray) -> np.ndarray | None:
+    """(K,) index of the nearest point (least range, then lowest index) in each occupied bin, bins
+    in the order of their keys; by a dense array over the bins' bounding box, without sorting (None
+    when that box holds more than MAX_DENSE_BINS_PER_POINT bins per point: sort instead)."""
+    low = cells.min(axis=0)
+    span = cells.max(axis=0) - low + 1
+    bins = int(span[0]) * int(span[1])
+    if bins > MAX_DENSE_BINS_PER_POINT * len(cells):
+        return None
+    # Row-major over (u, v), as _keys orders them.
+    dense = (cells[:, 0] - low[0]) * span[1] + (cells[:, 1] - low[1])
+    least = np.full(bins, np.inf)
+    np.minimum.at(least, dense, ranges)
+    tied = np.flatnonzero(ranges == least[dense])
+    first = np.full(bins, len(cells))
+    np.minimum.at(first, dense[tied], tied)
+    return first[first < len(cells)]
+
+
 def _keys(cells: np.ndarray) -> np.ndarray:
     """One int64 per bin (both angles well within +-2^30 bins)."""
     return cells[:, 0] * (1 << 32) + (cells[:, 1] + (1 << 31))
+
+
+def occluded_ends(points: np.ndarray, normals: np.ndarray, graph, view: ViewBuffer, params: PlanConfig) -> np.ndarray:
+    """(N,) True for the rims of the working surface (`points`, `normals`, their neighbourhood
+    `graph` within boundary.radius_m) past whose end the camera sees a wall's top (occluded_rims):
+    where a T-joint's flange meets a web whose face is too oblique to be seen."""
+    shift = inward_shift(points, normals, graph)
+    return occluded_rims(
+        points, shift, view, min_shift_m=params.boundary.shift_ratio * params.boundary.radius_m, past_m=PAST_END_M,
+        margin_m=params.joints.fillet_min_leg_m,
+    )
 
 
 def occluded_rims(points: np.ndarray, shift: np.ndarray, view: ViewBuffer, *, min_shift_m: float,

@@ -23,7 +23,7 @@ import numpy as np
 from weldseam.config import JointsConfig
 from weldseam.geometry import unit
 from weldseam.pipeline.joints import JointGeometry, JointKind, ProfileFit
-from weldseam.pipeline.joints.robust import line, noise
+from weldseam.pipeline.joints.robust import fraction, line, middle, noise
 
 # A face ends where the next point across the section lies more than GAP_M on; the face must be
 # straight: this share of its points within max(3 sigma, FACE_TOLERANCE_M) of its line.
@@ -76,7 +76,7 @@ def _faces(u, w, runs: list[np.ndarray]) -> list[np.ndarray]:
     faces = [runs[0]]
     for run in runs[1:]:
         intercept, slope = line(u[faces[-1]], w[faces[-1]])
-        if np.median(np.abs(w[run] - (intercept + slope * u[run]))) <= 2 * FACE_TOLERANCE_M:
+        if middle(np.abs(w[run] - (intercept + slope * u[run]))) <= 2 * FACE_TOLERANCE_M:
             faces[-1] = np.concatenate([faces[-1], run])
         else:
             faces.append(run)
@@ -89,7 +89,7 @@ def _corner(u, w, side, view, sight, params: JointsConfig):
     intercept, slope = line(u, w)
     residual = w - (intercept + slope * u)
     inliers = np.abs(residual) <= max(3 * noise(residual), FACE_TOLERANCE_M)
-    if len(u) < 8 or np.mean(inliers) < FACE_INLIERS or np.ptp(u[inliers]) < params.fillet_min_leg_m:
+    if len(u) < 8 or fraction(inliers) < FACE_INLIERS or np.ptp(u[inliers]) < params.fillet_min_leg_m:
         return None
     intercept, slope = line(u[inliers], w[inliers])
     # The face ends at its last point on its line (mixed pixels at the depth edge beyond it are not
@@ -119,6 +119,6 @@ def _corner(u, w, side, view, sight, params: JointsConfig):
     axis = -unit(along_face + wall)
     geometry = JointGeometry(included_deg=included, legs_m=None, faces_seen=1)
     outline = (tuple(face_end + along_face), tuple(face_end), tuple(face_end + wall))
-    residual_m = float(np.median(np.abs(residual[inliers])))
+    residual_m = middle(np.abs(residual[inliers]))
     return ProfileFit(JointKind.FILLET, float(face_end[0]), float(face_end[1]), float(axis[0]), float(axis[1]),
                       residual_m, geometry, tuple((float(a), float(b)) for a, b in outline))  # fmt: skip

@@ -35,17 +35,24 @@ def approximate_torch_axes(centres: list[np.ndarray], normals, tree, radius_m) -
     return np.split(unit(-sums), np.cumsum([len(c) for c in centres])[:-1])
 
 
-def probe_chains(chains: list[Chain], approx_axes: list[np.ndarray], surface: FineSurface) -> list[dict[int, SectionFit]]:
+def probe_chains(
+    chains: list[Chain], approx_axes: list[np.ndarray], surface: FineSurface, min_length_m: float = 0.0
+) -> list[dict[int, SectionFit]]:
     """For each chain, the fits of PROBE_SECTIONS evenly spaced sections along it, by chain point
-    index, in the frames trace_chain uses (so it reuses them)."""
+    index, in the frames trace_chain uses (so it reuses them); none for a chain shorter than
+    `min_length_m` (the trace rejects it unprobed)."""
     probes = []
     for chain, axes in zip(chains, approx_axes):
+        if polyline_length(chain.points, chain.closed) < min_length_m:
+            probes.append((np.empty(0, int), None))
+            continue
         travel, frame_axes, lateral = section_frames(chain.points, axes, chain.closed)
         at = np.unique(np.linspace(0, len(chain.points) - 1, PROBE_SECTIONS).round().astype(int))
         probes.append((at, (chain.points[at], travel[at], frame_axes[at], lateral[at])))
-    if not probes:
-        return []
-    frames = (np.concatenate(part) for part in zip(*(frame for _, frame in probes)))
+    framed = [frame for _, frame in probes if frame is not None]
+    if not framed:
+        return [{} for _ in probes]
+    frames = (np.concatenate(part) for part in zip(*framed))
     fits = iter(surface.fit_many(*frames))
     return [{int(k): next(fits) for k in at} for at, _ in probes]
 

@@ -30,7 +30,6 @@ from weldseam.pipeline import (
     join,
     normals,
     occlusion,
-    one_face,
     order,
     pairing,
     probe,
@@ -125,7 +124,11 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
             state.creases += found
             short += too_short
     if c.segment.occluded_ends and state.scan.camera_origin_m is not None and state.camera.ndim == 1:
-        found, too_short = _clusters(state, c, _occluded_ends(state, c))
+        # One camera: rims past whose end it sees a wall's top; the view buffer is kept for one_face.
+        state.view = occlusion.ViewBuffer.build(state.fine, state.camera, c.condition.voxel_m)
+        rims = occlusion.occluded_ends(state.working, state.normals, state.neighbourhoods(c.boundary.radius_m),
+                                       state.view, c)  # fmt: skip
+        found, too_short = _clusters(state, c, rims)
         state.creases += found
         short += too_short
     state.short_candidates = [replace(candidates.cluster_candidate(state.working[members]), rejection=Rejection.TOO_SHORT)
@@ -133,18 +136,6 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
     state.working_tree = cKDTree(state.working)
     chosen = [*state.clusters, *state.creases]
     state.dump("segment", state.working[np.concatenate(chosen)] if chosen else np.empty((0, 3)), None)
-
-
-def _occluded_ends(state: PlanState, c: PlanConfig) -> np.ndarray:
-    """The rims of surfaces past whose end the camera sees a wall's top (occlusion.occluded_rims):
-    where a T-joint's flange meets a web whose face is too oblique to be seen. The view buffer is
-    kept for the sections (one_face)."""
-    state.view = occlusion.ViewBuffer.build(state.fine, state.camera, c.condition.voxel_m)
-    shift = boundary.inward_shift(state.working, state.normals, state.neighbourhoods(c.boundary.radius_m))
-    return occlusion.occluded_rims(
-        state.working, shift, state.view, min_shift_m=c.boundary.shift_ratio * c.boundary.radius_m,
-        past_m=one_face.PAST_END_M, margin_m=c.joints.fillet_min_leg_m,
-    )
 
 
 def _crease_threshold(c: PlanConfig, variant: str) -> float:
@@ -236,7 +227,7 @@ def _probe(state: PlanState, c: PlanConfig) -> None:
     state.approx_axes = probe.approximate_torch_axes(
         [chain.points for chain in state.chains], state.normals, state.working_tree, c.joints.face_radius_m
     )
-    state.probes = probe.probe_chains(state.chains, state.approx_axes, state.surface)
+    state.probes = probe.probe_chains(state.chains, state.approx_axes, state.surface, min_length_m=c.grid.leaf_m)
 
 
 def _trace(state: PlanState, c: PlanConfig) -> None:

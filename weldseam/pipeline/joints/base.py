@@ -11,6 +11,8 @@ from enum import Enum
 
 import numpy as np
 
+from weldseam.pipeline.joints.robust import middle
+
 
 class JointKind(str, Enum):
     """The joint kinds weldseam plans; the value is the name written in path files."""
@@ -84,4 +86,4 @@ def outline_residual(u: np.ndarray, w: np.ndarray, outline, centre_u: float, rea
     low[0], high[-1] = -np.inf, np.inf  # the end segments run on
     closest = starts[None] + np.clip(t, low, high)[:, :, None] * along[None]
     distance = np.linalg.norm(points[:, None, :] - closest, axis=2).min(axis=1)
-    return float(np.median(distance))
+    return middle(distance)

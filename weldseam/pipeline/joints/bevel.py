@@ -20,7 +20,7 @@ import numpy as np
 
 from weldseam.config import JointsConfig
 from weldseam.pipeline.joints.base import JointGeometry, JointKind, NoFit, ProfileFit
-from weldseam.pipeline.joints.robust import line, median, noise, upper_decile
+from weldseam.pipeline.joints.robust import fraction, line, median, middle, noise, upper_decile
 from weldseam.pipeline.joints.v_groove import largest_run, surface_line
 
 KIND = JointKind.BEVEL
@@ -145,7 +145,7 @@ def _bevel_wall(x: np.ndarray, depth: np.ndarray, toward: float):
         if np.count_nonzero(inliers) < MIN_WALL_POINTS:
             return None
     c, m = line(x[inliers], depth[inliers])
-    if inliers.mean() < MIN_WALL_FRACTION or not (MIN_BEVEL_SLOPE <= toward * m <= MAX_BEVEL_SLOPE):
+    if fraction(inliers) < MIN_WALL_FRACTION or not (MIN_BEVEL_SLOPE <= toward * m <= MAX_BEVEL_SLOPE):
         return None
     root = float((toward * x[inliers]).max() * toward)
     return float(-c / m), float(toward * m), noise(depth[inliers] - (c + m * x[inliers])), root
@@ -161,6 +161,6 @@ def _surface_end(x: np.ndarray, toward: int) -> tuple[float, float]:
     gaps = np.flatnonzero(np.diff(ordered) * toward > SURFACE_GAP_M)
     ordered = ordered[: gaps[0] + 1] if len(gaps) else ordered
     last = ordered[::-1][:6]  # nearest the depression first
-    spacing = float(np.median(np.abs(np.diff(last)))) if len(last) > 1 else 0.0
+    spacing = middle(np.abs(np.diff(last))) if len(last) > 1 else 0.0
     return float(last[0]), float(last[0] + toward * spacing / 2)
 

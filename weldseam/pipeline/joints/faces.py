@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from weldseam.geometry import unit
-from weldseam.pipeline.joints.robust import line, noise
+from weldseam.pipeline.joints.robust import fraction, line, mean, noise, quantile
 
 # A break leaves at least this many points on each side.
 MIN_FACE_POINTS = 5
@@ -100,7 +100,8 @@ def best_break(u: np.ndarray, w: np.ndarray) -> Break | None:
     columns = [np.ones(n), x, x2, x2 * x, x2 * x2, w, x * w, x2 * w, w * w]
     sums = np.cumsum(np.column_stack(columns), axis=0)
     left = sums[splits - 1]
-    error = _parabola_error(left) + _parabola_error(sums[-1] - left)
+    both = _parabola_error(np.concatenate([left, sums[-1] - left]))  # one batch: each row solved alone
+    error = both[: len(splits)] + both[len(splits) :]
     best = int(np.argmin(error))
     index = int(splits[best])
     return Break(index, float(u[index]), float(w[index]), float(max(error[best], 0.0)))
@@ -118,7 +119,7 @@ def fit_face(u: np.ndarray, w: np.ndarray, origin: tuple[float, float], side: fl
     residual = w - _evaluate(_parabola(t, w), t)
     inliers = np.abs(residual) <= max(3 * noise(residual), MIN_INLIER_BAND_M)
     count = np.count_nonzero(inliers)
-    if inliers.mean() < INLIER_FRACTION or count < MIN_FACE_POINTS:
+    if fraction(inliers) < INLIER_FRACTION or count < MIN_FACE_POINTS:
         return None
     intercept, slope = line(t[inliers], w[inliers])
     line_error = float(np.sum((w[inliers] - intercept - slope * t[inliers]) ** 2))
@@ -157,7 +158,7 @@ def _on_face(distance: np.ndarray, near: np.ndarray) -> bool:
     """Whether INLIER_FRACTION of the signed distances (m) to a face lie within max(3 x the robust
     noise of the `near` ones, MIN_INLIER_BAND_M)."""
     band = max(3 * noise(distance[near]), MIN_INLIER_BAND_M)
-    return bool(np.quantile(np.abs(distance), INLIER_FRACTION) <= band)
+    return bool(quantile(np.abs(distance), INLIER_FRACTION) <= band)
 
 
 def _circle(u: np.ndarray, w: np.ndarray, iterations: int = 4) -> tuple[float, float, float] | None:
@@ -195,7 +196,7 @@ def _line_inliers(t, w) -> np.ndarray | None:
     intercept, slope = line(t, w)
     residual = w - intercept - slope * t
     inliers = np.abs(residual) <= max(3 * noise(residual), MIN_INLIER_BAND_M)
-    if inliers.mean() < INLIER_FRACTION or np.count_nonzero(inliers) < MIN_FACE_POINTS:
+    if fraction(inliers) < INLIER_FRACTION or np.count_nonzero(inliers) < MIN_FACE_POINTS:
         return None
     return inliers
 
@@ -242,8 +243,9 @@ def _bends_away(u: np.ndarray, w: np.ndarray) -> bool:
     below zero, explaining them CURVED_F better than a line."""
     intercept, slope = line(u, w)
     line_error = float(np.sum((w - intercept - slope * u) ** 2))
-    curve = _parabola(u - u.mean(), w)
-    curve_error = float(np.sum((w - _evaluate(curve, u - u.mean())) ** 2))
+    centred = u - mean(u)
+    curve = _parabola(centred, w)
+    curve_error = float(np.sum((w - _evaluate(curve, centred)) ** 2))
     significant = (line_error - curve_error) * (len(u) - 3) > CURVED_F * max(curve_error, 1e-18)
     return bool(significant and curve[2] < 0)
 
@@ -264,7 +266,8 @@ def _parabola(s: np.ndarray, n: np.ndarray) -> np.ndarray:
     """(c0, c1, c2) of the least-squares parabola n = c0 + c1 s + c2 s^2."""
     scale = max(float(np.abs(s).max()), 1e-9)
     x = s / scale
-    design = np.column_stack([np.ones_like(x), x, x * x])
+    design = np.empty((len(x), 3))
+    design[:, 0], design[:, 1], design[:, 2] = 1.0, x, x * x
     solution = np.linalg.lstsq(design, n, rcond=None)[0]
     return solution / np.array([1.0, scale, scale * scale])
 
@@ -276,8 +279,8 @@ def _evaluate(coefficients: np.ndarray, s: np.ndarray) -> np.ndarray:
 def _parabola_error(sums: np.ndarray) -> np.ndarray:
     """Residual sum of squares of the least-squares parabola through each segment, from its sums
     (rows: 1, x, x^2, x^3, x^4, w, xw, x^2w, w^2): sum w^2 - b^T A^-1 b (normal equations A c = b)."""
-    s0, s1, s2, s3, s4, sw, sxw, sx2w, sww = sums.T
-    normal = np.stack([np.stack([s0, s1, s2], -1), np.stack([s1, s2, s3], -1), np.stack([s2, s3, s4], -1)], -2)
-    normal += np.eye(3) * (1e-12 * s0)[:, None, None]  # a segment whose points share one u
-    b = np.stack([sw, sxw, sx2w], -1)
-    return sww - np.einsum("ij,ij->i", b, np.linalg.solve(normal, b[..., None])[..., 0])
+    # normal[:, i, j] = sum of x^(i + j) (columns 0-4 of the sums); b = sums of w, x w, x^2 w.
+    normal = sums[:, np.add.outer(np.arange(3), np.arange(3))]
+    normal += np.eye(3) * (1e-12 * sums[:, 0])[:, None, None]  # a segment whose points share one u
+    b = sums[:, 5:8]
+    return sums[:, 8] - np.einsum("ij,ij->i", b, np.linalg.solve(normal, b[..., None])[..., 0])

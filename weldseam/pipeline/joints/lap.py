@@ -20,7 +20,7 @@ import numpy as np
 
 from weldseam.config import JointsConfig
 from weldseam.pipeline.joints.base import JointGeometry, JointKind, NoFit, ProfileFit
-from weldseam.pipeline.joints.robust import line, median, noise
+from weldseam.pipeline.joints.robust import fraction, line, mean, median, noise
 
 KIND = JointKind.LAP
 # Where the step lies does not depend on where the window sits.
@@ -149,7 +149,7 @@ def _parallel_surfaces(x: np.ndarray, y: np.ndarray) -> _Plates | NoFit:
     for part, away in ((slice(0, split), -1), (slice(split, len(x)), 1)):
         px, py = x[part], y[part]
         inliers = _on_line(px, py, away)
-        if inliers.mean() < MIN_INLIER_FRACTION or np.count_nonzero(inliers) < MIN_SIDE_POINTS:
+        if fraction(inliers) < MIN_INLIER_FRACTION or np.count_nonzero(inliers) < MIN_SIDE_POINTS:
             return NoFit("a plate surface is not a straight line")
         sides.append((px, py, inliers, line(px[inliers], py[inliers])[1]))
     (lx, ly, left_in, left_slope), (rx, ry, right_in, right_slope) = sides
@@ -211,7 +211,7 @@ def _on_line(x: np.ndarray, y: np.ndarray, away: int) -> np.ndarray:
 def _parallel_lines(lu, lw, ru, rw) -> tuple[float, float, float, float]:
     """(slope, left intercept, right intercept, robust noise) of two parallel lines through the
     left and right points."""
-    lu_mean, lw_mean, ru_mean, rw_mean = lu.mean(), lw.mean(), ru.mean(), rw.mean()
+    lu_mean, lw_mean, ru_mean, rw_mean = mean(lu), mean(lw), mean(ru), mean(rw)
     dlu, dru = lu - lu_mean, ru - ru_mean
     slope = float((dlu @ (lw - lw_mean) + dru @ (rw - rw_mean)) / max(dlu @ dlu + dru @ dru, 1e-18))
     left_w0, right_w0 = lw_mean - slope * lu_mean, rw_mean - slope * ru_mean

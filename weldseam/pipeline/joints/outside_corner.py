@@ -22,7 +22,7 @@ import numpy as np
 from weldseam.config import JointsConfig
 from weldseam.geometry import unit
 from weldseam.pipeline.joints.base import JointGeometry, JointKind, NoFit, ProfileFit
-from weldseam.pipeline.joints.robust import line, median, noise, upper_decile
+from weldseam.pipeline.joints.robust import fraction, line, median, middle, noise, upper_decile
 
 KIND = JointKind.OUTSIDE_CORNER
 # Where the ridge lies does not depend on where the window sits.
@@ -189,7 +189,7 @@ def _face(u: np.ndarray, w: np.ndarray, away: int) -> tuple[float, float, float]
         inliers = np.abs(residual) <= max(3 * noise(residual), SURFACE_BAND_M)
         if np.count_nonzero(inliers) < MIN_SIDE_POINTS:
             return None
-    if inliers.mean() < MIN_INLIER_FRACTION:
+    if fraction(inliers) < MIN_INLIER_FRACTION:
         return None
     intercept, slope = line(u[inliers], w[inliers])
     return intercept, slope, noise(w[inliers] - (intercept + slope * u[inliers]))
@@ -207,7 +207,7 @@ def _face_end(u: np.ndarray, away: int) -> tuple[float, float, float]:
     steps = np.abs(np.diff(ordered))
     gaps = np.flatnonzero(steps > MAX_FACE_SPACING_M)
     last = ordered[gaps[0]] if len(gaps) else ordered[-1]
-    spacing = float(np.median(steps[:EDGE_GAPS])) if len(steps) else 0.0
+    spacing = middle(steps[:EDGE_GAPS]) if len(steps) else 0.0
     return float(abs(last - ordered[0])), float(ordered[0]), float(ordered[0] - away * spacing / 2)
 
 

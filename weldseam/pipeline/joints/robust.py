@@ -17,12 +17,55 @@ def line(u: np.ndarray, w: np.ndarray) -> tuple[float, float]:
     return float(mean_w - slope * mean_u), slope
 
 
+def mean(values: np.ndarray) -> float:
+    """The mean, as ndarray.mean gives it, without its overhead."""
+    return float(np.add.reduce(values)) / len(values)
+
+
+def fraction(mask: np.ndarray) -> float:
+    """The fraction of a boolean mask that is set (its mean), without the overhead of mean."""
+    return np.count_nonzero(mask) / len(mask)
+
+
 def median(values: np.ndarray) -> float:
     """Upper median, by partition."""
     middle = len(values) // 2
     ordered = values.copy()
     ordered.partition(middle)
     return float(ordered[middle])
+
+
+def middle(values: np.ndarray) -> float:
+    """np.median's value, by partition: the middle value, or the mean of the two middle ones (NaN
+    if any value is NaN)."""
+    if np.isnan(values).any():
+        return float("nan")
+    half = len(values) // 2
+    if len(values) % 2:
+        return float(_partitioned(values, (half,))[half])
+    ordered = _partitioned(values, (half - 1, half))
+    return float((ordered[half - 1] + ordered[half]) / 2)
+
+
+def quantile(values: np.ndarray, fraction: float) -> float:
+    """np.quantile's value (linear interpolation, as numpy rounds it), by partition (NaN if any
+    value is NaN)."""
+    if np.isnan(values).any():
+        return float("nan")
+    position = (len(values) - 1) * fraction
+    low = int(position)
+    if low >= len(values) - 1:
+        return float(values.max())
+    ordered = _partitioned(values, (low, low + 1))
+    below, above, gamma = ordered[low], ordered[low + 1], position - low
+    step = above - below
+    return float(above - step * (1 - gamma) if gamma >= 0.5 else below + step * gamma)
+
+
+def _partitioned(values: np.ndarray, kth: tuple[int, ...]) -> np.ndarray:
+    ordered = values.copy()
+    ordered.partition(kth)
+    return ordered
 
 
 def upper_decile(values: np.ndarray) -> float:

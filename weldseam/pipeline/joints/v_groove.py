@@ -78,7 +78,26 @@ def fit(u: np.ndarray, w: np.ndarray, params: JointsConfig) -> ProfileFit | NoFi
 def surface_line(u: np.ndarray, w: np.ndarray, min_depth_m: float):
     """(intercept, slope, on_surface, residual, depth_limit, sigma) of the plate surface line
     through the profile, or NoFit: an upper envelope, started from the outer halves, that
-    repeatedly ignores points below the line (deeper than max(3 sigma, 0.4 min_depth))."""
+    repeatedly ignores points below the line (deeper than max(3 sigma, 0.4 min_depth)).
+
+    The V-groove, the bevel and the square butt each start from the surface line of the same
+    profile: the last one found is kept, for these very arrays (its own arrays read-only)."""
+    global _last_surface
+    last = _last_surface  # read once: a fit on another thread may replace it meanwhile
+    if last and last[0] is u and last[1] is w and last[2] == min_depth_m:
+        return last[3]
+    found = _surface_line(u, w, min_depth_m)
+    if not isinstance(found, NoFit):
+        for array in found[2:4]:
+            array.flags.writeable = False
+    _last_surface = (u, w, min_depth_m, found)
+    return found
+
+
+_last_surface: tuple = ()
+
+
+def _surface_line(u: np.ndarray, w: np.ndarray, min_depth_m: float):
     half_width = max(abs(u[0]), abs(u[-1]))
     on_surface = np.abs(u) > half_width / 2
     if np.count_nonzero(on_surface) < 6:
