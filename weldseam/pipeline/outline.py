@@ -54,24 +54,33 @@ def outline_edges(patches: Patches, cloud: np.ndarray, origin: np.ndarray, voxel
     if len(points) <= FACE_NEIGHBOURS or not patches.smooth.any():
         return Surface(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0))
     normals = _face_normals(points, patches.normal[rows], patches.smooth[rows], voxel_m)
-    creases = _crease_samples(points[patches.smooth[rows]], patches.normal[rows][patches.smooth[rows]], voxel_m)
+    creases = _crease_samples(points, patches.normal[rows], patches.smooth[rows], voxel_m)
     jumps = _jump_samples(points, normals, origin, voxel_m)
-    jumps = (_last_points(cloud, *jumps, voxel_m), jumps[1])
+    jumps = (_last_points(_cloud_near(cloud, patches, jumps[0], voxel_m), *jumps, voxel_m), jumps[1])
     end, outward = (np.vstack([creases[k], jumps[k]]) for k in (0, 1))
     keep = _first_per_voxel(end, outward, voxel_m)
     return Surface(end[keep], end[keep], outward[keep], np.full(len(keep), voxel_m * voxel_m))
 
 
-def _crease_samples(points: np.ndarray, normals: np.ndarray, voxel_m: float) -> tuple[np.ndarray, np.ndarray]:
+def _crease_samples(points: np.ndarray, normals: np.ndarray, smooth: np.ndarray,
+                    voxel_m: float) -> tuple[np.ndarray, np.ndarray]:
     """Where two smooth faces meet: for each smooth patch p (normal n) and each smooth patch q
     (normal m) within CREASE_REACH_VOXELS turned more than MIN_CREASE_DEG from it and straight
     across the crease line n x m from it (within a voxel along that line), the point of
     p's plane on the crease line, p + t o with o = (n x m) x n toward q and t = m . (q - p) / (m . o),
     and o: (M, 3) points and (M, 3) outward directions. Each face's own plane places the
-    crease, not the patches that straddle it (their planes are fitted across it)."""
-    distance, index = cKDTree(points).query(points, CREASE_NEIGHBOURS + 1, distance_upper_bound=CREASE_REACH_VOXELS * voxel_m)
+    crease, not the patches that straddle it (their planes are fitted across it). Only smooth
+    patches that far from a patch that is not smooth are looked at: a crease bends the patches
+    fitted across it, the inside of a face has none."""
+    reach_m = CREASE_REACH_VOXELS * voxel_m
+    if smooth.all() or not smooth.any():
+        return np.zeros((0, 3)), np.zeros((0, 3))
+    normals, bent = normals[smooth], points[~smooth]
+    points = points[smooth]
+    looked = np.flatnonzero(np.isfinite(cKDTree(bent).query(points, distance_upper_bound=reach_m)[0]))
+    distance, index = cKDTree(points).query(points[looked], CREASE_NEIGHBOURS + 1, distance_upper_bound=reach_m)
     found = np.isfinite(distance[:, 1:])
-    first = np.repeat(np.arange(len(points)), found.sum(axis=1))
+    first = np.repeat(looked, found.sum(axis=1))
     second = index[:, 1:][found]
     n, m = normals[first], normals[second]
     turned = np.einsum("ij,ij->i", n, m) < np.cos(np.radians(MIN_CREASE_DEG))
@@ -105,6 +114,15 @@ def _jump_samples(points: np.ndarray, normals: np.ndarray, origin: np.ndarray, v
     occluded, behind = _past_edge(points, origin, end + JUMP_VOXELS * voxel_m * outward, voxel_m)
     jump = edge & ~crease & ~occluded & behind
     return end[jump], outward[jump], normals[looked[jump]]
+
+
+def _cloud_near(cloud: np.ndarray, patches: Patches, ends: np.ndarray, voxel_m: float) -> np.ndarray:
+    """The points of `cloud` in the patches within two voxels of any of `ends` (M, 3): all that
+    _last_points reads, without a search tree over the whole frame."""
+    if len(ends) == 0:
+        return cloud[:0]
+    near = np.isfinite(cKDTree(ends).query(patches.point, distance_upper_bound=2 * voxel_m)[0])
+    return cloud[near[patches.group]]
 
 
 def _last_points(cloud: np.ndarray, ends: np.ndarray, outward: np.ndarray, normals: np.ndarray,
