@@ -35,10 +35,10 @@ from weldseam.geometry import transform_points
 from weldseam.pipeline import register
 from weldseam.pipeline.neighbours import radius_pairs
 from weldseam.pipeline.outline import outline_edges
-from weldseam.pipeline.patches import Patches, frame_patches, voxel_keys
+from weldseam.pipeline.patches import Patches, direction_cells, frame_patches, voxel_keys
 from weldseam.pipeline.register import Registration, Surface
 
-PATCHES_PER_DIRECTION = 400  # ICP patches per facing direction (_direction_cells) and patch size
+PATCHES_PER_DIRECTION = 400  # ICP patches per facing direction (direction_cells) and patch size
 FAR_SIDE_M = 0.015  # two frames seeing opposite faces of a wall thinner than this: one face is kept
 MAX_WALL_ANGLE_DEG = 60.0  # a wall's two faces are within this of facing opposite ways
 CONVEXITY_MARGIN_PER_M = 5.0  # curvatures closer than this (a 200 mm radius) are alike
@@ -187,8 +187,8 @@ def _icp_surface(cloud: np.ndarray, patches: Patches, origin: np.ndarray, voxel_
 
 def _balanced(normal: np.ndarray, per_direction: int) -> np.ndarray:
     """Indices (ascending) of at most `per_direction` of `normal` (M, 3) per facing direction
-    (_direction_cells), evenly strided within each."""
-    direction = _direction_cells(normal)
+    (direction_cells), evenly strided within each."""
+    direction = direction_cells(normal)
     order = np.argsort(direction, kind="stable")
     _, start, size = np.unique(direction[order], return_index=True, return_counts=True)
     rank = np.arange(len(order)) - np.repeat(start, size)
@@ -212,7 +212,7 @@ def _near_sides(patches: list[Patches], corrections: np.ndarray, origins: np.nda
         resolution = np.abs(np.einsum("ij,ij->i", normal, rays)) / np.linalg.norm(rays, axis=1) ** 3
         placed.append((surface, point, normal, resolution))
     trees = [cKDTree(point, balanced_tree=False) for _, point, _, _ in placed]
-    facings = [np.unique(_direction_cells(normal)) for _, _, normal, _ in placed]
+    facings = [np.unique(direction_cells(normal)) for _, _, normal, _ in placed]
     min_cosine = np.cos(np.radians(MAX_WALL_ANGLE_DEG))
     near = []
     for a, (index, point, normal, resolution) in enumerate(placed):
@@ -221,7 +221,7 @@ def _near_sides(patches: list[Patches], corrections: np.ndarray, origins: np.nda
             if a == b or len(other) == 0:
                 continue
             # Only where b faces about the other way somewhere can a patch of a be a wall's side.
-            asked = np.flatnonzero(np.isin(_direction_cells(-normal), _around(facings[b])))
+            asked = np.flatnonzero(np.isin(direction_cells(-normal), _around(facings[b])))
             distance, nearest = trees[b].query(point[asked], distance_upper_bound=FAR_SIDE_M, workers=-1)
             hit = np.isfinite(distance)
             mine, theirs = asked[hit], nearest[hit]
@@ -247,12 +247,6 @@ def _near_sides(patches: list[Patches], corrections: np.ndarray, origins: np.nda
         keep[index[on_wall[calls > 0.5 * voters]]] = False
         near.append(keep)
     return near
-
-
-def _direction_cells(normals: np.ndarray) -> np.ndarray:
-    """(M,) facing direction of each unit normal (M, 3): its cell in a 4 x 4 x 4 grid over [-1, 1]^3."""
-    cell = np.minimum(((normals + 1.0) * 2.0).astype(np.int64), 3)
-    return (cell[:, 0] * 4 + cell[:, 1]) * 4 + cell[:, 2]
 
 
 def _around(cells: np.ndarray) -> np.ndarray:

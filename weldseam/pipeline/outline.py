@@ -91,7 +91,7 @@ def _crease_samples(points: np.ndarray, normals: np.ndarray, smooth: np.ndarray,
     outward *= np.sign(np.einsum("ij,ij->i", outward, toward))[:, None]
     reach = np.einsum("ij,ij->i", m, toward) / np.einsum("ij,ij->i", m, outward)
     beside = np.abs(np.einsum("ij,ij->i", line, toward)) <= voxel_m  # q faces p across the crease, not past its end
-    near = beside & (reach > -0.5 * voxel_m) & (reach < CREASE_REACH_VOXELS * voxel_m)
+    near = beside & (reach > -0.5 * voxel_m) & (reach < reach_m)
     return points[first[near]] + reach[near, None] * outward[near], outward[near]
 
 

@@ -111,3 +111,9 @@ def voxel_keys(points: np.ndarray, corner: np.ndarray, voxel_m: float) -> np.nda
     (3,), no point below it: x, y, z cell indices below 2^21 each (8.4 km at 4 mm)."""
     cells = ((points - corner) * (1.0 / voxel_m)).astype(np.int64)  # truncation is floor here
     return (cells[:, 0] << 42) | (cells[:, 1] << 21) | cells[:, 2]
+
+
+def direction_cells(normals: np.ndarray) -> np.ndarray:
+    """(M,) facing direction of each unit normal (M, 3): its cell in a 4 x 4 x 4 grid over [-1, 1]^3."""
+    cell = np.minimum(((normals + 1.0) * 2.0).astype(np.int64), 3)
+    return (cell[:, 0] * 4 + cell[:, 1]) * 4 + cell[:, 2]

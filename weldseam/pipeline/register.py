@@ -14,6 +14,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from weldseam.geometry import transform_points
+from weldseam.pipeline.patches import direction_cells
 
 MAX_NORMAL_ANGLE_DEG = 20.0  # an ICP pair's two normals agree within this
 TUKEY_C = 4.685  # Tukey's biweight constant, in robust standard deviations (1.4826 MAD)
@@ -275,10 +276,10 @@ def _information(rows: list, directions: np.ndarray) -> np.ndarray:
 
 def _tukey_scales(residuals: np.ndarray, normals: np.ndarray, reach_m: float) -> np.ndarray:
     """(N,) Tukey cut-off of each pair: c = 4.685 x 1.4826 median |r| over the pairs facing the
-    same way (the normal's cell in a 4 x 4 x 4 grid over [-1, 1]^3), within [MIN_SCALE_M,
+    same way (patches.direction_cells), within [MIN_SCALE_M,
     reach_m]. A slide only a few faces or edges see (a box's ends) is not outvoted by the many
     that cannot see it (its top): their residuals would set a cut-off far below its offset."""
-    cell = np.minimum(((normals + 1.0) * 2.0).astype(np.int64), 3) @ np.array([16, 4, 1])
+    cell = direction_cells(normals)
     order = np.argsort(cell, kind="stable")
     _, start, size = np.unique(cell[order], return_index=True, return_counts=True)
     medians = np.array([np.median(part) for part in np.split(np.abs(residuals[order]), start[1:])])
