@@ -30,9 +30,7 @@ def fraction(mask: np.ndarray) -> float:
 def median(values: np.ndarray) -> float:
     """Upper median, by partition."""
     middle = len(values) // 2
-    ordered = values.copy()
-    ordered.partition(middle)
-    return float(ordered[middle])
+    return float(_partitioned(values, (middle,))[middle])
 
 
 def middle(values: np.ndarray) -> float:
@@ -63,6 +61,7 @@ def quantile(values: np.ndarray, fraction: float) -> float:
 
 
 def _partitioned(values: np.ndarray, kth: tuple[int, ...]) -> np.ndarray:
+    """A copy of `values` partitioned at the indices `kth` (each holds its value in sorted order)."""
     ordered = values.copy()
     ordered.partition(kth)
     return ordered
@@ -73,8 +72,7 @@ def upper_decile(values: np.ndarray) -> float:
     position = 0.9 * (len(values) - 1)
     low = int(position)
     high = min(low + 1, len(values) - 1)
-    ordered = values.copy()
-    ordered.partition((low, high))
+    ordered = _partitioned(values, (low, high))
     return float(ordered[low] + (position - low) * (ordered[high] - ordered[low]))
 
 
