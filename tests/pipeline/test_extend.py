@@ -338,3 +338,24 @@ def test_a_seam_seen_with_one_face_all_along_is_extended_by_its_one_face_corners
     extension = Extension(None, JointKind.FILLET, replace(ExtendConfig(), max_extension_m=0.05))
     steps, _ = extend.extend_end(extension, seam.positions_m, seam.torch_axes, flags)
     assert len(steps) == 25
+
+
+def drifting_end_trace(drift_m):
+    """A trace along the groove (y = 0) whose last four points drift sideways to `drift_m`, as the
+    fits beside a plate's end or a table do."""
+    seam = straight_trace(-0.075, -0.043, [0.0, 0.0, -1.0])
+    positions = seam.positions_m.copy()
+    positions[-4:, 1] = drift_m * np.arange(1, 5) / 4
+    return replace(seam, positions_m=positions)
+
+
+@pytest.mark.parametrize("drift_m", [0.0035, 0.0045])
+def test_an_extension_past_an_end_that_drifts_sideways_goes_on_along_the_seams_line(rng, drift_m):
+    """The curve through the drifting end points aims 3-5 mm off the groove within a few steps;
+    the seam's line over its last stretch does not."""
+    positions = extended(drifting_end_trace(drift_m), plate_ending_on_a_table(rng))
+    beyond = positions[positions[:, 0] > -0.042]
+    assert len(beyond) and beyond[:, 0].max() > -0.006, "the groove is followed on to near the plate end"
+    # As in the dropout test, the last sections straddle the plate end; before them, on the groove.
+    assert np.abs(beyond[beyond[:, 0] < -0.012, 1]).max() < 0.0005, "on the groove, not on the drift's continuation"
+

@@ -3,6 +3,8 @@ seam predicted ahead along that curve."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from weldseam.geometry import arc_lengths, unit
@@ -52,3 +54,32 @@ def end_curve(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def ahead(last_point, direction, bend, distance_m: float) -> tuple[np.ndarray, np.ndarray]:
     """The predicted seam point `distance_m` on along the curve (end_curve) and its travel."""
     return last_point + distance_m * direction + 0.5 * distance_m**2 * bend, unit(direction + distance_m * bend)
+
+
+@dataclass(frozen=True)
+class SeamLine:
+    """The straight line through a seam's last stretch: a point on it and its unit direction."""
+
+    point: np.ndarray
+    direction: np.ndarray
+
+    def holds(self, point: np.ndarray, axis: np.ndarray, step_m: float) -> bool:
+        """Whether `point` (3,) lies within 1.5 steps of the line sideways (across the torch `axis`
+        made perpendicular to the line) and half a step along the axis."""
+        offset = point - self.point
+        offset = offset - (offset @ self.direction) * self.direction
+        axis = unit(axis - (axis @ self.direction) * self.direction)
+        depth = offset @ axis
+        return bool(abs(depth) <= 0.5 * step_m and np.linalg.norm(offset - depth * axis) <= 1.5 * step_m)
+
+
+def seam_line(points: np.ndarray) -> SeamLine | None:
+    """The line fitted (centroid, principal direction) to the last TANGENT_BASELINE_M of arc of
+    `points` (K, 3, travel order), pointing on; None with fewer than 5 points there."""
+    ordered = points[::-1]
+    window = ordered[arc_lengths(ordered) <= TANGENT_BASELINE_M] if len(ordered) else ordered
+    if len(window) < 5:
+        return None
+    centre = window.mean(axis=0)
+    direction = np.linalg.svd(window - centre, full_matrices=False)[2][0]
+    return SeamLine(centre, direction if direction @ (window[0] - window[-1]) >= 0 else -direction)

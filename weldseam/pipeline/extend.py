@@ -5,7 +5,9 @@ turn, a short list of strategies; the first that finds the seam adds its fits, a
 re-aimed by them:
 
 1. the next fit ahead (stepping over failed sections up to `max_skip_m`; a groove section in a
-   dropout is bridged from the sections before: weldseam.pipeline.bridge);
+   dropout is bridged from the sections before: weldseam.pipeline.bridge), near the predicted
+   curve or near the seam's straight line over its last stretch (the curve of a drifting end
+   turns off the seam; seek.next_fit);
 2. a turn over a 90-degree edge (a groove over a block's edge, a seam up a wall: turn.py);
 3. a tack weld over the seam just ahead, crossed on the seam line (tacks.py);
 4. the part's end: where the scan sees past the part just ahead, the seam stops there;
@@ -26,7 +28,7 @@ from scipy.spatial import cKDTree
 from weldseam.config import ExtendConfig
 from weldseam.geometry import arc_lengths, bend_corner, polyline_length, unit
 from weldseam.pipeline.bridge import GrooveTemplate, groove_template, part_ends_ahead
-from weldseam.pipeline.ends import END_BASELINE_M, TANGENT_BASELINE_M, ahead, end_curve
+from weldseam.pipeline.ends import END_BASELINE_M, TANGENT_BASELINE_M, ahead, end_curve, seam_line
 from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.parallel import map_shared
 from weldseam.pipeline.section import FineSurface, PointFlag, SectionFit, section_frames
@@ -265,8 +267,7 @@ def _next_step(extension: Extension, end: SeamEnd) -> Step | None:
     corner with one face unseen only near the curve of the last fit with both faces seen
     (SeamEnd.on_curve): past a pipe's silhouette the end of the plate seen is a shadow's edge,
     running off the pipe's foot along the line of sight."""
-    direction, bend = end.heading()
-    fit = next_fit(extension, end.positions[-1], end.axes[-1], direction, bend, end.template())
+    fit = next_fit(extension, end.positions[-1], end.axes[-1], end.heading(), end.template(), seam_line(end.fitted))
     if fit is None or (fit.flags & PointFlag.ONE_FACE and not end.on_curve(fit.point_m)):
         return None
     return Step([fit])

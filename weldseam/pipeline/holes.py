@@ -68,7 +68,7 @@ def across_hole(extension: Extension, last_point, last_axis, aims) -> list[Secti
         leaving = ahead(origin, direction, bend, lead)[1]  # the aim's travel at the end
         run = [fit]
         while len(run) < HOLE_CONFIRM:
-            following = next_fit(extension, run[-1].point_m, run[-1].torch_axis, travel, bend)
+            following = next_fit(extension, run[-1].point_m, run[-1].torch_axis, (travel, bend))
             if following is None:
                 break
             run.append(following)

@@ -9,7 +9,7 @@ import numpy as np
 from weldseam.config import ExtendConfig
 from weldseam.geometry import unit
 from weldseam.pipeline.bridge import GrooveTemplate, fit_or_bridge
-from weldseam.pipeline.ends import ahead
+from weldseam.pipeline.ends import SeamLine, ahead
 from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.section import FineSurface, SectionFit
 
@@ -23,24 +23,33 @@ class Extension:
     params: ExtendConfig
 
 
-def next_fit(extension: Extension, last_point, last_axis, direction, bend, template: GrooveTemplate | None = None):
-    """The next fit along the predicted curve from the end (ends.ahead), stepping over failed
-    sections up to max_skip_m, or None. Where a section fails and the groove's template is known,
-    it is bridged (a dropout over part of the groove: bridge.fit_or_bridge).
+def next_fit(extension: Extension, last_point, last_axis, heading, template: GrooveTemplate | None = None,
+             line: SeamLine | None = None):
+    """The next fit along the curve predicted from the end (ends.ahead of `heading`: (direction,
+    bend)), stepping over failed sections up to max_skip_m, or None. Where a section fails and
+    the groove's template is known, it is bridged (a dropout over part of the groove:
+    bridge.fit_or_bridge).
 
     A fit counts when it lies within max(1.5 steps, 15 % of the distance from the last fit) of the
     prediction sideways (the fit is a verified joint profile and the better estimate: near an end
     the prediction drifts by 1-3 mm; the bound follows curves of radius down to ~40 mm across the
     largest gap), and within max(half a step, 20 % of the distance) along the torch axis (the
     surface does not jump, a section that straddles the part's end face does; but an end tangent
-    fitted to end points that drift in depth leans into the work, 1-2 mm over a 12 mm gap)."""
+    fitted to end points that drift in depth leans into the work, 1-2 mm over a 12 mm gap).
+
+    A fit off that curve also counts within 1.5 steps sideways and half a step in depth of the
+    seam's straight `line` (None: no such line) over its last stretch (ends.SeamLine): the curve's
+    direction rests on the last few fits, and where those drift by a millimetre (the fits at a
+    plate's end, beside a table) it turns 5-15 degrees off the seam, 3 mm sideways within two
+    steps; the line over TANGENT_BASELINE_M is not turned by them."""
     step = extension.params.step_m
+    direction, bend = heading
     distance = step
     while distance <= extension.params.max_skip_m:
         predicted, travel = ahead(last_point, direction, bend, distance)
         fit, depth, sideways = section_at(extension, predicted, travel, last_axis, template)
         near = sideways <= max(1.5 * step, 0.15 * distance) and depth <= max(0.5 * step, 0.2 * distance)
-        if fit.kind == extension.joint and near:
+        if fit.kind == extension.joint and (near or (line is not None and line.holds(fit.point_m, last_axis, step))):
             return fit
         distance += step
     return None

@@ -115,7 +115,7 @@ def across_tack(extension: Extension, last_point, last_axis, direction, bend) ->
             continue
         run = [fit]
         while len(run) < TACK_CONFIRM:
-            following = next_fit(extension, run[-1].point_m, run[-1].torch_axis, travel, bend)
+            following = next_fit(extension, run[-1].point_m, run[-1].torch_axis, (travel, bend))
             if following is None:
                 return None
             run.append(following)

@@ -34,7 +34,7 @@ def turned_run(extension: Extension, last_point, last_axis, direction):
                 continue
             run = [fit]
             while np.linalg.norm(run[-1].point_m - run[0].point_m) < TURN_CONFIRM_M:
-                following = next_fit(extension, run[-1].point_m, run[-1].torch_axis, travel, np.zeros(3))
+                following = next_fit(extension, run[-1].point_m, run[-1].torch_axis, (travel, np.zeros(3)))
                 if following is None:
                     break
                 run.append(following)
