@@ -79,8 +79,8 @@ def _corner(u, w, index: int, start):
     if min(index, len(u) - index) < MIN_FACE_POINTS:
         return NoFit("too few points for two faces")
     left = fit_face(u[:index], w[:index], start, -1.0)
-    right = fit_face(u[index:], w[index:], start, 1.0)
-    if left is None or right is None:
+    right = None if left is None else fit_face(u[index:], w[index:], start, 1.0)
+    if right is None:
         return NoFit("a face is neither straight nor smoothly curved")
     corner_u = meeting_point(left, right, start[0])
     if corner_u is None or not (u[0] <= corner_u <= u[-1]):
