@@ -1,10 +1,11 @@
+from dataclasses import replace
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from weldseam.config import JointsConfig
-from weldseam.pipeline.joints import JointGeometry, JointKind, NoFit, ProfileFit, fit_profile
+from weldseam.pipeline.joints import JointGeometry, JointKind, NoFit, ProfileFit, SortedProfile, fit_profile
 from weldseam.pipeline.joints.base import outline_residual
 
 FILLET, SQUARE_BUTT, V_GROOVE = JointKind.FILLET, JointKind.SQUARE_BUTT, JointKind.V_GROOVE
@@ -220,7 +221,7 @@ def test_a_square_butt_wins_over_a_groove_that_measured_no_flank(monkeypatch, rn
     u, w = profile(lambda u: 0 * u, rng, noise=0.0)
 
     def model(kind, offset_m, geometry):
-        def fit(u, w, params):
+        def fit(profile):
             outline = ((-1.0, offset_m), (1.0, offset_m))  # a line offset_m over the plate
             return ProfileFit(kind, 0.0, 0.0, 0.0, -1.0, 0.0, geometry, outline)
         return SimpleNamespace(KIND=kind, CENTRED=True, SPECIALISES=None, fit=fit)
@@ -266,7 +267,7 @@ def test_of_the_models_that_fit_the_closest_outline_wins_whatever_their_order(mo
     u, w = profile(lambda u: np.abs(u - 0.002), rng)  # a corner at u = 2 mm
 
     def model(kind, corner_u):
-        def fit(u, w, params):
+        def fit(profile):
             outline = ((corner_u - 1.0, 1.0), (corner_u, 0.0), (corner_u + 1.0, 1.0))
             return ProfileFit(kind, corner_u, 0.0, 0.0, -1.0, 0.0, JointGeometry(), outline)
         return SimpleNamespace(KIND=kind, CENTRED=False, SPECIALISES=None, fit=fit)
@@ -285,7 +286,7 @@ def test_a_fit_whose_outline_lies_far_from_the_points_is_no_fit(monkeypatch, rng
 
     u, w = profile(lambda u: np.abs(u - 0.002), rng)
 
-    def fit(u, w, params):
+    def fit(profile):
         outline = ((0.008 - 1.0, 1.0), (0.008, 0.0), (0.008 + 1.0, 1.0))
         return ProfileFit(FILLET, 0.008, 0.0, 0.0, -1.0, 0.0, JointGeometry(), outline)
 
@@ -294,15 +295,19 @@ def test_a_fit_whose_outline_lies_far_from_the_points_is_no_fit(monkeypatch, rng
     assert isinstance(found, NoFit) and "outline lies" in found.reason
 
 
-def test_the_surface_line_is_shared_by_the_models_of_one_profile_only(rng):
+def test_the_surface_line_is_computed_once_per_profile(rng):
     """The V-groove, bevel and square butt models read one surface line per profile: the same
-    arrays give the very same (read-only) result, equal arrays of another profile their own."""
-    from weldseam.pipeline.joints.v_groove import surface_line
-
+    profile gives the very same (read-only) result, another profile of equal points its own,
+    and a deeper least groove ignores more points below the line."""
     u, w = profile(v_groove(0.001), rng)
-    first = surface_line(u, w, 0.001)
-    assert surface_line(u, w, 0.001) is first
-    assert not first[2].flags.writeable and not first[3].flags.writeable
-    again = surface_line(u.copy(), w.copy(), 0.001)
+    shallow = SortedProfile.of(u, w, PARAMS)
+    first = shallow.surface
+    assert shallow.surface is first
+    assert not first.on_surface.flags.writeable and not first.residual.flags.writeable
+    again = SortedProfile.of(u.copy(), w.copy(), PARAMS).surface
     assert again is not first and all(np.array_equal(a, b) for a, b in zip(again, first))
-    assert surface_line(u, w, 0.002) is not first
+    deep = SortedProfile.of(u, w, replace(PARAMS, groove_min_depth_m=0.004)).surface
+    assert deep.depth_limit > first.depth_limit
+    # The groove (8 mm half-opening at u = 1 mm) lies below the line, the plate beside it on it.
+    assert not first.on_surface[np.abs(shallow.u - 0.001) < 0.004].any()
+    assert first.on_surface[np.abs(shallow.u - 0.001) > 0.012].mean() > 0.9

@@ -7,7 +7,7 @@ import pytest
 
 from tests.pipeline.test_joints import profile, v_groove
 from weldseam.config import JointsConfig
-from weldseam.pipeline.joints import JointKind, NoFit, bevel, fit_profile
+from weldseam.pipeline.joints import JointKind, NoFit, SortedProfile, bevel, fit_profile
 
 BEVEL, V_GROOVE = JointKind.BEVEL, JointKind.V_GROOVE
 PARAMS = JointsConfig()
@@ -46,7 +46,7 @@ def test_the_seam_is_the_middle_of_the_opening_and_the_torch_perpendicular_to_th
     offsets, angles, kinds = [], [], []
     for _ in range(20):
         u, w, seam, axis = bevel_profile(rng, **shape)
-        fit = bevel.fit(u, w, PARAMS)
+        fit = bevel.fit(SortedProfile.of(u, w, PARAMS))
         offsets.append((fit.u - seam[0], fit.w - seam[1]))
         angles.append(np.degrees(np.arccos(np.clip(fit.axis_u * axis[0] + fit.axis_w * axis[1], -1.0, 1.0))))
         kinds.append(fit_profile(u, w, PARAMS).kind)
@@ -59,7 +59,7 @@ def test_noisy_sparse_and_quantised_bevels_are_centred(rng):
     for _ in range(20):
         u, w, seam, _ = bevel_profile(rng, noise=0.0005, pitch=0.001, tilt_deg=6.0)
         quantised = np.round((w - 0.0001) / 0.001) * 0.001 + 0.0001
-        for fit in (bevel.fit(u, w, PARAMS), bevel.fit(u, quantised, PARAMS)):
+        for fit in (bevel.fit(SortedProfile.of(u, w, PARAMS)), bevel.fit(SortedProfile.of(u, quantised, PARAMS))):
             if not isinstance(fit, NoFit):
                 offsets.append(fit.u - seam[0])
     assert len(offsets) >= 20 and abs(np.mean(offsets)) < 0.0003
@@ -95,4 +95,4 @@ def test_a_v_groove_stays_a_v_groove_even_with_one_wall_hidden(rng, hidden_wall)
 def test_what_is_not_a_bevel_gives_no_bevel(rng, shape):
     u = np.arange(-0.025, 0.025, 0.0005)
     w = shape(u) + rng.normal(0.0, 0.0002, len(u))
-    assert isinstance(bevel.fit(u, w, PARAMS), NoFit)
+    assert isinstance(bevel.fit(SortedProfile.of(u, w, PARAMS)), NoFit)

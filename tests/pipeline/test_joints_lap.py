@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from weldseam.config import JointsConfig
-from weldseam.pipeline.joints import JointKind, NoFit, fit_profile
+from weldseam.pipeline.joints import JointKind, NoFit, SortedProfile, fit_profile
 from weldseam.pipeline.joints import lap
 
 LAP = JointKind.LAP
@@ -109,13 +109,13 @@ def test_the_torch_split_aims_the_torch_toward_the_bottom_plate(rng):
 def test_what_is_not_a_lap_gives_no_lap(rng, shape):
     u = np.arange(-0.025, 0.025, PITCH_M)
     w = shape(u) + rng.normal(0.0, 0.0003, len(u))
-    assert isinstance(lap.fit(u, w, PARAMS), NoFit)
+    assert isinstance(lap.fit(SortedProfile.of(u, w, PARAMS)), NoFit)
 
 
 def test_a_step_with_too_little_of_either_plate_beside_it_is_no_lap(rng):
     u, w, _, _ = lap_profile(rng)
     near = np.abs(u - 0.002) < 0.004  # 4 mm of each plate
-    assert isinstance(lap.fit(u[near], w[near], PARAMS), NoFit)
+    assert isinstance(lap.fit(SortedProfile.of(u[near], w[near], PARAMS)), NoFit)
 
 
 def test_a_groove_beside_a_step_is_no_lap(rng):
@@ -124,4 +124,4 @@ def test_a_groove_beside_a_step_is_no_lap(rng):
     u, w, _, _ = lap_profile(rng, height=0.004, edge=0.0, face_seen=False)
     groove = (u > 0.006) & (u < 0.012)
     w[groove] -= 0.003 * (1.0 - np.abs(u[groove] - 0.009) / 0.003)
-    assert isinstance(lap.fit(u, w, PARAMS), NoFit)
+    assert isinstance(lap.fit(SortedProfile.of(u, w, PARAMS)), NoFit)

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from weldseam.config import JointsConfig
-from weldseam.pipeline.joints import JointKind, NoFit, fit_profile, outside_corner
+from weldseam.pipeline.joints import JointKind, NoFit, SortedProfile, fit_profile, outside_corner
 
 CORNER = JointKind.OUTSIDE_CORNER
 PARAMS = JointsConfig()
@@ -78,13 +78,13 @@ def test_depth_quantised_in_1_mm_steps_is_found(rng):
 def test_what_is_not_an_outside_corner_gives_none(rng, shape):
     u = np.arange(-0.025, 0.025, 0.0005)
     w = shape(u) + rng.normal(0.0, 0.0002, len(u))
-    assert isinstance(outside_corner.fit(u, w, PARAMS), NoFit)
+    assert isinstance(outside_corner.fit(SortedProfile.of(u, w, PARAMS)), NoFit)
 
 
 def test_a_ridge_with_a_shallow_scratch_is_no_outside_corner(rng):
     """A notch shallower than joints.groove_min_depth_m (1.5 mm) along a ridge is no open V."""
     u, w, _, _ = corner_profile(rng, depth_m=0.0012)
-    assert isinstance(outside_corner.fit(u, w, PARAMS), NoFit)
+    assert isinstance(outside_corner.fit(SortedProfile.of(u, w, PARAMS)), NoFit)
 
 
 def test_a_face_seen_short_of_its_edge_moves_the_seam_only_along_the_torch_axis(rng):

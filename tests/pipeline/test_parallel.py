@@ -78,3 +78,19 @@ def test_a_forked_child_runs_blocks_on_a_pool_of_its_own(monkeypatch):
         os.kill(pid, 9)
     os.waitpid(pid, 0)
     assert ready and os.read(read_end, 100) == b"45"
+
+
+def _item_and_process(shared: list, item: int) -> tuple[int, int, int]:
+    return item, shared[item], os.getpid()
+
+
+def test_the_worker_process_maps_every_second_item_and_the_results_keep_their_order(monkeypatch):
+    """map_shared: the results come in the items' order whoever computed them, the worker computing
+    the odd items (neighbouring sections cost alike: each process gets half of every stretch)."""
+    monkeypatch.setattr(parallel.os, "cpu_count", lambda: 2)
+    shared = [10 * k for k in range(7)]
+    with parallel.worker_process(shared):
+        results = parallel.map_shared(_item_and_process, (shared,), list(range(7)))
+    assert [(item, value) for item, value, _ in results] == [(k, 10 * k) for k in range(7)]
+    processes = [pid for _, _, pid in results]
+    assert set(processes[::2]) == {os.getpid()} and os.getpid() not in processes[1::2]

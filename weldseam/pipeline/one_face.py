@@ -100,6 +100,12 @@ def _corner(u, w, side, view, sight, params: JointsConfig):
     normal = unit(np.array([-slope, 1.0]))  # the face's normal, out of the work (w up)
     if np.dot(normal, view) <= 0:
         return None  # the camera sees the face from behind: not a face of this part
+    # A wall square to the face at its end faces along the face (back into the corner): the camera
+    # must see it edge-on (too oblique to measure), not from behind (then the wall hides the face's
+    # end, which is a shadow's edge and not the wall's foot) nor square on (then its missing points
+    # are a dropout). Tested before the line of sight is looked up: it needs only the face.
+    if not -EDGE_ON_COS <= along_face @ np.asarray(view) <= OBLIQUE_COS:
+        return None
     top = next((found for past in PAST_END_M if (found := sight(*(face_end - past * along_face))) is not None), None)
     if top is None:
         return None
@@ -107,12 +113,6 @@ def _corner(u, w, side, view, sight, params: JointsConfig):
     if wall @ normal < params.fillet_min_leg_m:
         return None  # nothing a face's length above the face's end: a plate's edge, not a wall
     wall = unit(wall)
-    # A wall square to the face at its end faces along the face (back into the corner): the camera
-    # must see it edge-on (too oblique to measure), not from behind (then the wall hides the face's
-    # end, which is a shadow's edge and not the wall's foot) nor square on (then its missing points
-    # are a dropout).
-    if not -EDGE_ON_COS <= along_face @ np.asarray(view) <= OBLIQUE_COS:
-        return None
     included = float(np.degrees(np.arccos(np.clip(along_face @ wall, -1.0, 1.0))))
     if not MIN_INCLUDED_DEG <= included <= MAX_INCLUDED_DEG:
         return None

@@ -124,21 +124,29 @@ def _leave_interrupts_to_parent() -> None:
 
 def map_shared(func: Callable, shared: tuple, items: Sequence) -> list:
     """[func(*shared, item) for item in items]; while a worker_process holds these very objects
-    `shared` and is idle, it computes the second half of the items (func and the items are
-    pickled). A map_shared inside func runs here: the worker is busy with the other half."""
+    `shared` and is idle, it computes every second item (func and those items are pickled):
+    neighbouring items (sections along one chain) cost alike, so each process gets about half
+    of the work even where one stretch of the batch costs more than another. A map_shared inside
+    func runs here: the worker is busy with the other items."""
     global _worker_busy
     if _worker is None or _worker_busy or len(items) < 2 or len(shared) != len(_shared) or any(
         a is not b for a, b in zip(shared, _shared)
     ):
         return [func(*shared, item) for item in items]
-    half = (len(items) + 1) // 2
-    theirs = _worker.submit(_map_in_worker, func, list(items[half:]))
+    theirs = _worker.submit(_map_in_worker, func, list(items[1::2]))
     _worker_busy = True
     try:
-        ours = [func(*shared, item) for item in items[:half]]
-        return ours + theirs.result()
+        ours = [func(*shared, item) for item in items[::2]]
+        return _interleaved(ours, theirs.result())
     finally:
         _worker_busy = False
+
+
+def _interleaved(evens: list, odds: list) -> list:
+    """[evens[0], odds[0], evens[1], odds[1], ...] (len(evens) - len(odds) is 0 or 1)."""
+    merged = [None] * (len(evens) + len(odds))
+    merged[::2], merged[1::2] = evens, odds
+    return merged
 
 
 def _map_in_worker(func: Callable, items: list) -> list:

@@ -4,8 +4,9 @@ a residual and the measured geometry, or no fit with the reason.
 A model is a module with `KIND` (a JointKind), `CENTRED` (whether its fit assumes the joint in the
 middle of the section window), `MIN_LENGTH_M` (the shortest seam of its kind, m; 0: as short as
 split.min_seam_length_m allows), `SPECIALISES` (the kind it is a special case of, or None) and
-`fit(u, w, params) -> ProfileFit | NoFit` (u ascending), the fit with its outline. Adding a
-joint kind means adding one model module and its entry in MODELS.
+`fit(profile: SortedProfile) -> ProfileFit | NoFit`, the fit with its outline. Every model of a
+section reads one SortedProfile, which computes what several of them derive (the plate surface
+line) once. Adding a joint kind means adding one model module and its entry in MODELS.
 """
 
 from __future__ import annotations
@@ -18,8 +19,9 @@ import numpy as np
 from weldseam.config import JointsConfig
 from weldseam.pipeline.joints import bevel, fillet, lap, outside_corner, square_butt, v_groove
 from weldseam.pipeline.joints.base import JointGeometry, JointKind, NoFit, ProfileFit, outline_residual
+from weldseam.pipeline.joints.profile import SortedProfile
 
-__all__ = ["MODELS", "JointGeometry", "JointKind", "NoFit", "ProfileFit", "akin", "fit_profile", "min_length_m", "one_joint", "recentred"]
+__all__ = ["MODELS", "JointGeometry", "JointKind", "NoFit", "ProfileFit", "SortedProfile", "akin", "fit_profile", "min_length_m", "one_joint", "recentred"]
 
 MODELS = (v_groove, fillet, lap, square_butt, bevel, outside_corner)
 MIN_PROFILE_POINTS = 12
@@ -51,13 +53,13 @@ def fit_profile(
     square butt fit against a V-groove or bevel that measured no flank (see SQUARE_OPENING)."""
     if len(u) < MIN_PROFILE_POINTS:
         return NoFit("too few points in the section")
-    order = np.argsort(u, kind="stable")
-    u, w = u[order], w[order]
+    profile = SortedProfile.of(u, w, params)
+    u, w = profile.u, profile.w
     reasons, fits = [], []
     for model in MODELS:
         if kinds is not None and model.KIND not in kinds:
             continue
-        found = model.fit(u, w, params)
+        found = model.fit(profile)
         if isinstance(found, NoFit):
             reasons.append(f"{model.KIND.value}: {found.reason}")
             continue

@@ -1,7 +1,7 @@
 """The single bevel (half V) model: a plate surface on both sides, one plate's edge square, the
 other's bevelled 25-55 degrees from the plate normal.
 
-The plate surface and the depression below it as for the V-groove (v_groove.surface_line); the
+The plate surface and the depression below it as for the V-groove (SortedProfile.surface); the
 profile is then read along the surface: x along it, depth below it. Either wall may be hidden:
 seen square on, the bevel faces the camera and the square wall is unseen; from aside, the square
 wall may face the camera while the bevel grazes away. The model tries each side as the bevel:
@@ -18,10 +18,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from weldseam.config import JointsConfig
 from weldseam.pipeline.joints.base import JointGeometry, JointKind, NoFit, ProfileFit
+from weldseam.pipeline.joints.profile import SortedProfile
 from weldseam.pipeline.joints.robust import fraction, line, median, middle, noise, upper_decile
-from weldseam.pipeline.joints.v_groove import largest_run, surface_line
+from weldseam.pipeline.joints.v_groove import largest_run
 
 KIND = JointKind.BEVEL
 # The surface line is fitted to the outer halves of the window: the groove must sit in its middle.
@@ -52,9 +52,9 @@ EDGE_TOLERANCE_M = 0.0015
 SURFACE_GAP_M = 0.002
 
 
-def fit(u: np.ndarray, w: np.ndarray, params: JointsConfig) -> ProfileFit | NoFit:
-    """The single bevel in a profile (u ascending), or why there is none."""
-    surface = surface_line(u, w, params.groove_min_depth_m)
+def fit(profile: SortedProfile) -> ProfileFit | NoFit:
+    """The single bevel in a profile, or why there is none."""
+    u, w, params, surface = profile.u, profile.w, profile.params, profile.surface
     if isinstance(surface, NoFit):
         return surface
     intercept, slope, on_surface, _, depth_limit, sigma = surface

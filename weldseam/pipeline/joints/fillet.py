@@ -24,6 +24,7 @@ from weldseam.pipeline.joints.base import JointGeometry, JointKind, NoFit, Profi
 from weldseam.pipeline.joints.faces import (
     MIN_FACE_POINTS, MIN_FACE_RADIUS_M, Face, best_break, fit_face, meeting_point, straight_faces,
 )
+from weldseam.pipeline.joints.profile import SortedProfile
 
 KIND = JointKind.FILLET
 # Where two fitted faces meet does not depend on where the window sits.
@@ -43,10 +44,11 @@ MAX_FACE_SPACING_M = 0.004
 OUTLINE_SAMPLES = 8
 
 
-def fit(u: np.ndarray, w: np.ndarray, params: JointsConfig) -> ProfileFit | NoFit:
-    """The inside corner in a profile (u ascending), or why there is none: of faces that may curve
+def fit(profile: SortedProfile) -> ProfileFit | NoFit:
+    """The inside corner in a profile, or why there is none: of faces that may curve
     meeting at a crease (_curved_faces), else of two straight faces over the whole sides (a valley
     rounded at its bottom: _straight_faces)."""
+    u, w, params = profile.u, profile.w, profile.params
     reasons = []
     for faces_of, max_included_deg in ((_curved_faces, MAX_CREASE_DEG), (_straight_faces, MAX_ROUNDED_DEG)):
         found = faces_of(u, w)
@@ -77,8 +79,8 @@ def _corner(u, w, index: int, start):
     if min(index, len(u) - index) < MIN_FACE_POINTS:
         return NoFit("too few points for two faces")
     left = fit_face(u[:index], w[:index], start, -1.0)
-    right = fit_face(u[index:], w[index:], start, 1.0)
-    if left is None or right is None:
+    right = None if left is None else fit_face(u[index:], w[index:], start, 1.0)
+    if right is None:
         return NoFit("a face is neither straight nor smoothly curved")
     corner_u = meeting_point(left, right, start[0])
     if corner_u is None or not (u[0] <= corner_u <= u[-1]):

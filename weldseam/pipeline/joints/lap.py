@@ -18,8 +18,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from weldseam.config import JointsConfig
 from weldseam.pipeline.joints.base import JointGeometry, JointKind, NoFit, ProfileFit
+from weldseam.pipeline.joints.profile import SortedProfile
 from weldseam.pipeline.joints.robust import fraction, line, mean, median, noise
 
 KIND = JointKind.LAP
@@ -75,8 +75,9 @@ class _Plates(NamedTuple):
     sigma: float
 
 
-def fit(u: np.ndarray, w: np.ndarray, params: JointsConfig) -> ProfileFit | NoFit:
-    """The lap's inside corner in a profile (u ascending), or why there is none."""
+def fit(profile: SortedProfile) -> ProfileFit | NoFit:
+    """The lap's inside corner in a profile, or why there is none."""
+    u, w, params = profile.u, profile.w, profile.params
     first = _parallel_surfaces(u, w)
     if isinstance(first, NoFit):
         return first

@@ -19,9 +19,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from weldseam.config import JointsConfig
 from weldseam.geometry import unit
 from weldseam.pipeline.joints.base import JointGeometry, JointKind, NoFit, ProfileFit
+from weldseam.pipeline.joints.profile import SortedProfile
 from weldseam.pipeline.joints.robust import fraction, line, median, middle, noise, upper_decile
 
 KIND = JointKind.OUTSIDE_CORNER
@@ -64,8 +64,9 @@ EDGE_SIGMAS = 2.5
 MIN_EDGE_BAND_M = 0.0003
 
 
-def fit(u: np.ndarray, w: np.ndarray, params: JointsConfig) -> ProfileFit | NoFit:
-    """The outside corner in a profile (u ascending), or why there is none."""
+def fit(profile: SortedProfile) -> ProfileFit | NoFit:
+    """The outside corner in a profile, or why there is none."""
+    u, w, params = profile.u, profile.w, profile.params
     split = _best_break(u, w)
     if split is None:
         return NoFit("too few points for two faces")

@@ -1,7 +1,7 @@
 """The square butt model (I-groove): two coplanar plate surfaces with a narrow opening between
 them, and no bevel.
 
-A reference line through the plate surface on both sides (v_groove.surface_line), and an opening
+A reference line through the plate surface on both sides (SortedProfile.surface), and an opening
 in it within REACH_M of the window's centre: two neighbouring surface points u_left < u_right with
 joints.gap_min_m <= u_right - u_left <= joints.gap_max_m. What lies between them is nothing (a
 dropout along the gap) or lies deeper than the surface (the table or the far side seen through the
@@ -29,8 +29,8 @@ import numpy as np
 
 from weldseam.config import JointsConfig
 from weldseam.pipeline.joints.base import JointGeometry, JointKind, NoFit, ProfileFit
+from weldseam.pipeline.joints.profile import SortedProfile
 from weldseam.pipeline.joints.robust import line, median, one_plane, upper_decile
-from weldseam.pipeline.joints.v_groove import surface_line
 
 KIND = JointKind.SQUARE_BUTT
 # The surface line is fitted to the outer halves of the window: the opening must sit in its middle.
@@ -57,9 +57,9 @@ COPLANAR_RAD = np.radians(8.0)
 SEEN_THROUGH_M = 0.001
 
 
-def fit(u: np.ndarray, w: np.ndarray, params: JointsConfig) -> ProfileFit | NoFit:
-    """The square butt joint in a profile (u ascending), or why there is none."""
-    surface = surface_line(u, w, params.groove_min_depth_m)
+def fit(profile: SortedProfile) -> ProfileFit | NoFit:
+    """The square butt joint in a profile, or why there is none."""
+    u, w, params, surface = profile.u, profile.w, profile.params, profile.surface
     if isinstance(surface, NoFit):
         return surface
     intercept, slope, on_surface, residual, depth_limit, sigma = surface

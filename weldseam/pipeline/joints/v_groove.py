@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from weldseam.config import JointsConfig
 from weldseam.pipeline.joints.base import JointGeometry, JointKind, NoFit, ProfileFit
+from weldseam.pipeline.joints.profile import SortedProfile
 from weldseam.pipeline.joints.robust import line, median, noise, upper_decile
 
 KIND = JointKind.V_GROOVE
@@ -21,11 +21,6 @@ KIND = JointKind.V_GROOVE
 CENTRED = True
 MIN_LENGTH_M = 0.0
 SPECIALISES = None
-# The least noise a plate surface is taken to have: depth quantised in 1 mm steps (RealSense
-# and most structured-light cameras), seen square on, leaves most of a flat surface on one level
-# and the next 1 mm below; the median deviation is then ~0 and that level would pass for a
-# depression. 1 mm / sqrt(12) = 0.29 mm.
-SURFACE_NOISE_FLOOR_M = 0.0003
 # A groove edge put at the last surface point may lie this far beyond the mirror image of the
 # other edge about the groove bottom (_groove_edges). With one wall hidden, the bottom (the
 # median of the deepest points) sits up the visible wall, measured up to 1.2 mm, so the mirror
@@ -35,9 +30,9 @@ HIDDEN_EDGE_SLACK_M = 0.004
 GROOVE_GAP_M = 0.004
 
 
-def fit(u: np.ndarray, w: np.ndarray, params: JointsConfig) -> ProfileFit | NoFit:
-    """The V-groove in a profile (u ascending), or why there is none."""
-    surface = surface_line(u, w, params.groove_min_depth_m)
+def fit(profile: SortedProfile) -> ProfileFit | NoFit:
+    """The V-groove in a profile, or why there is none."""
+    u, w, params, surface = profile.u, profile.w, profile.params, profile.surface
     if isinstance(surface, NoFit):
         return surface
     intercept, slope, on_surface, residual, depth_limit, sigma = surface
@@ -73,45 +68,6 @@ def fit(u: np.ndarray, w: np.ndarray, params: JointsConfig) -> ProfileFit | NoFi
     outline_w = intercept + slope * outline_u - np.array([0.0, 0.0, deepest, 0.0, 0.0])
     return ProfileFit(KIND, centre_u, intercept + slope * centre_u, slope / norm, -1.0 / norm, sigma, geometry,
                       tuple(zip(outline_u.tolist(), outline_w.tolist())))  # fmt: skip
-
-
-def surface_line(u: np.ndarray, w: np.ndarray, min_depth_m: float):
-    """(intercept, slope, on_surface, residual, depth_limit, sigma) of the plate surface line
-    through the profile, or NoFit: an upper envelope, started from the outer halves, that
-    repeatedly ignores points below the line (deeper than max(3 sigma, 0.4 min_depth)).
-
-    The V-groove, the bevel and the square butt each start from the surface line of the same
-    profile: the last one found is kept, for these very arrays (its own arrays read-only)."""
-    global _last_surface
-    last = _last_surface  # read once: a fit on another thread may replace it meanwhile
-    if last and last[0] is u and last[1] is w and last[2] == min_depth_m:
-        return last[3]
-    found = _surface_line(u, w, min_depth_m)
-    if not isinstance(found, NoFit):
-        for array in found[2:4]:
-            array.flags.writeable = False
-    _last_surface = (u, w, min_depth_m, found)
-    return found
-
-
-_last_surface: tuple = ()
-
-
-def _surface_line(u: np.ndarray, w: np.ndarray, min_depth_m: float):
-    half_width = max(abs(u[0]), abs(u[-1]))
-    on_surface = np.abs(u) > half_width / 2
-    if np.count_nonzero(on_surface) < 6:
-        return NoFit("too few points beside the section centre")
-    for _ in range(6):
-        intercept, slope = line(u[on_surface], w[on_surface])
-        residual = w - (intercept + slope * u)
-        sigma = max(noise(residual[on_surface]), SURFACE_NOISE_FLOOR_M)
-        depth_limit = max(3 * sigma, 0.4 * min_depth_m)
-        updated = (residual > -depth_limit) & (residual < 4 * sigma + depth_limit)
-        if np.count_nonzero(updated) < 6 or np.array_equal(updated, on_surface):
-            break
-        on_surface = updated
-    return intercept, slope, on_surface, residual, depth_limit, sigma
 
 
 def largest_run(u: np.ndarray, deep: np.ndarray) -> np.ndarray:
