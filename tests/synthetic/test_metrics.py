@@ -1,5 +1,7 @@
 """evaluate(): a path made from the truth scores perfectly; known offsets score as offset."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -105,3 +107,22 @@ def test_each_seam_counts_as_kind_matched_only_when_its_path_names_its_kind():
     assert evaluate(_truth_paths(scene, scan, joints=["fillet", "fillet"]), scan, scene)["kinds_matched"] == 1
     assert evaluate(_truth_paths(scene, scan, joints=["fillet", "lap"]), scan, scene)["kinds_matched"] == 0
     assert evaluate(_truth_paths(scene, scan, offset_m=0.003), scan, scene)["kinds_matched"] == 0, "paths elsewhere"
+
+
+def test_poses_on_a_stretch_the_mask_calls_unseen_are_on_the_seam_but_do_not_cover_it(butt):
+    """The visible mask is a conservative view cone: a planner that measures a stretch beyond it
+    is on the seam there (no position or axis error); coverage still counts only what the mask
+    marks as seen, and poses off the seam there are errors."""
+    scene, scan = butt
+    seam = scene.seams[0]
+    half = len(seam.points_m) // 2
+    unseen_half = replace(scan, visible=(np.arange(len(seam.points_m)) < half,))
+    frames = frames_from_axes(seam.torch_axes, np.gradient(seam.points_m, axis=0))
+    whole = WeldPath(0, seam.points_m, frames, joint=seam.joint)
+    result = evaluate([whole], unseen_half, scene)
+    assert result["mean_position_error_m"] < 1e-9 and result["mean_axis_error_deg"] < 1e-6
+    assert result["coverage"] == pytest.approx(1.0)
+    beyond = WeldPath(0, seam.points_m[half:], frames[half:], joint=seam.joint)
+    assert evaluate([beyond], unseen_half, scene)["coverage"] < 0.02
+    off = WeldPath(0, seam.points_m + 0.002 * frames[:, :, 0], frames, joint=seam.joint)
+    assert evaluate([off], unseen_half, scene)["mean_position_error_m"] == pytest.approx(0.002, abs=5e-5)
