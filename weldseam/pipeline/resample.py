@@ -60,10 +60,12 @@ def _travel(positions: np.ndarray, arc: np.ndarray, reach_m: float, period: floa
     offset = arc[None, :] - centre[:, None]
     if period is not None:
         offset = (offset + period / 2) % period - period / 2
-    weights = np.exp(-0.5 * (offset / reach_m) ** 2)
-    moments = [np.sum(weights * offset**power, axis=1) for power in range(5)]
+    weighted = [np.exp(-0.5 * (offset / reach_m) ** 2)]  # w s^power for power 0..4, each (K, K)
+    for _ in range(4):
+        weighted.append(weighted[-1] * offset)
+    moments = [np.add.reduce(term, axis=1) for term in weighted]
     normal = np.stack([np.stack(moments[row : row + 3], axis=-1) for row in range(3)], axis=-2)  # (K, 3, 3)
-    right = np.stack([(weights * offset**power) @ positions for power in range(3)], axis=1)  # (K, 3 powers, 3 xyz)
+    right = np.stack([term @ positions for term in weighted[:3]], axis=1)  # (K, 3 powers, 3 xyz)
     coefficients = np.linalg.solve(normal, right)
     return unit(coefficients[:, 1, :] + 2 * (arc - centre)[:, None] * coefficients[:, 2, :])
 
