@@ -32,20 +32,42 @@ def resample_seam(
     samples = np.linspace(0.0, total, count, endpoint=False) if closed else np.linspace(0.0, total, count + 1)
     new_positions = np.column_stack([np.interp(samples, arc, positions[:, k]) for k in range(3)])
     new_axes = unit(np.column_stack([np.interp(samples, arc, torch_axes[:, k]) for k in range(3)]))
-    travel = _chords(new_positions, max(1, int(round(2 * smoothing_m / spacing_m))), closed)
+    # The samples' own arc lengths: smoothing shortens a noisy line, so the knots' arc overstates them.
+    sampled_arc = arc_lengths(new_positions, closed)
+    # The travel's Gaussian is the positions': a wider one holds a sparse, noisy straight seam
+    # steadier but rounds a groove's 90-degree turn over a block's edge more (by degrees there).
+    travel = _travel(new_positions, sampled_arc[: len(new_positions)], smoothing_m, sampled_arc[-1] if closed else None)
     new_axes = unit(new_axes - np.sum(new_axes * travel, axis=1, keepdims=True) * travel)
     return new_positions, frames_from_axes(new_axes, travel)
 
 
-def _chords(positions: np.ndarray, k: int, closed: bool) -> np.ndarray:
-    """Unit travel directions (K, 3): the chord from k samples behind to k ahead (fewer at
-    open ends), steadier than neighbouring differences against sub-millimetre noise."""
-    index = np.arange(len(positions))
-    if closed:
-        ahead, behind = (index + k) % len(positions), (index - k) % len(positions)
-    else:
-        ahead, behind = np.minimum(index + k, len(positions) - 1), np.maximum(index - k, 0)
-    return unit(positions[ahead] - positions[behind])
+def _travel(positions: np.ndarray, arc: np.ndarray, reach_m: float, period: float | None) -> np.ndarray:
+    """Unit travel directions (K, 3) of a line sampled at `positions` (K, 3), arc lengths `arc`
+    (K,): the slope at each sample of the quadratic p(s) = c0 + c1 s + c2 s^2 fitted by least
+    squares with Gaussian weights of sigma `reach_m` in arc length around a centre: the sample
+    itself, or on an open line within 2 sigma of an end, the point 2 sigma in from that end (a
+    window that holds samples on both sides; fitted at the end itself, the quadratic's slope
+    swings with the noise of the last few points), the slope there carried to the sample along
+    the quadratic (c1 + 2 c2 (s - centre)). Unlike a chord, unbent by a seam's curve, also at its
+    ends, where a chord from the samples on one side tilts the torch along a 3-D curve by degrees.
+    Circular distance with `period` (a closed line). Two samples: their chord."""
+    if len(positions) < 3:
+        return np.broadcast_to(unit(positions[-1] - positions[0]), positions.shape).copy()
+    centre = arc
+    if period is None:
+        inner = 2 * reach_m
+        centre = np.clip(arc, min(inner, arc[-1] / 2), max(arc[-1] - inner, arc[-1] / 2))
+    offset = arc[None, :] - centre[:, None]
+    if period is not None:
+        offset = (offset + period / 2) % period - period / 2
+    weighted = [np.exp(-0.5 * (offset / reach_m) ** 2)]  # w s^power for power 0..4, each (K, K)
+    for _ in range(4):
+        weighted.append(weighted[-1] * offset)
+    moments = [np.add.reduce(term, axis=1) for term in weighted]
+    normal = np.stack([np.stack(moments[row : row + 3], axis=-1) for row in range(3)], axis=-2)  # (K, 3, 3)
+    right = np.stack([term @ positions for term in weighted[:3]], axis=1)  # (K, 3 powers, 3 xyz)
+    coefficients = np.linalg.solve(normal, right)
+    return unit(coefficients[:, 1, :] + 2 * (arc - centre)[:, None] * coefficients[:, 2, :])
 
 
 def _smooth(positions, axes, arc, sigma_m, period):

@@ -70,12 +70,12 @@ def fit(profile: SortedProfile) -> ProfileFit | NoFit:
     split = _best_break(u, w)
     if split is None:
         return NoFit("too few points for two faces")
-    faces = []
-    for part, away in ((slice(0, split), -1), (slice(split, len(u)), 1)):
-        face = _face(u[part], w[part], away)
-        if face is None:
-            return NoFit("a face is not a straight line")
-        faces.append(face)
+    # Points seen through the root gap, far below the roof, pull the least-squares break off the
+    # ridge by millimetres: the faces are split again where their robust lines meet.
+    faces = _faces(u, w, split, min_fraction=0.0)
+    faces = None if faces is None else _faces(u, w, _apex_split(u, faces, split), MIN_INLIER_FRACTION)
+    if faces is None:
+        return NoFit("a face is not a straight line")
     (a_left, b_left, sigma_left), (a_right, b_right, sigma_right) = faces
     if not (b_left > 0 > b_right):  # convex: both faces fall away from the ridge
         return NoFit("the two faces do not form a convex ridge")
@@ -176,21 +176,40 @@ def _wall_edge(u, w, face, face_end: float, bottom_u: float, hidden: float) -> f
     return float(edge) if min(inner, outer) <= edge <= max(inner, outer) else hidden
 
 
-def _face(u: np.ndarray, w: np.ndarray, away: int) -> tuple[float, float, float] | None:
-    """(intercept, slope, noise) of one face's line, or None where it is not straight: started
-    through the half of its points farthest from the break (toward `away`; the V beside the ridge
-    does not tilt it), then twice the points within max(3 sigma, SURFACE_BAND_M) of the line and
-    the line through them."""
+def _faces(u: np.ndarray, w: np.ndarray, split: int, min_fraction: float) -> list | None:
+    """The lines (_face) of the faces left and right of the break before index `split`, or None
+    where one is not straight (fewer than `min_fraction` of its side's points on its line)."""
+    faces = [_face(u[:split], w[:split], -1, min_fraction), _face(u[split:], w[split:], 1, min_fraction)]
+    return None if any(face is None for face in faces) else faces
+
+
+def _apex_split(u: np.ndarray, faces: list, split: int) -> int:
+    """The index of the first point right of where the faces' lines meet (the ridge), or `split`
+    where they meet in no place that leaves each side its points (parallel lines, or near a
+    window's edge)."""
+    (a_left, b_left, _), (a_right, b_right, _) = faces
+    if b_left == b_right:
+        return split
+    index = int(np.searchsorted(u, (a_right - a_left) / (b_left - b_right)))
+    return index if 2 * MIN_SIDE_POINTS <= index <= len(u) - 2 * MIN_SIDE_POINTS else split
+
+
+def _face(u: np.ndarray, w: np.ndarray, away: int, min_fraction: float) -> tuple[float, float, float] | None:
+    """(intercept, slope, noise) of one face's line, or None where it is not straight (fewer than
+    `min_fraction` of the points on it): started through the half of its points farthest from the
+    break (toward `away`; the V beside the ridge does not tilt it), then twice the points within
+    max(3 sigma, SURFACE_BAND_M) of the line and the line through them, sigma the noise of the
+    points the line was fitted to (the V's and the other face's points beside it are not noise)."""
     if len(u) < 2 * MIN_SIDE_POINTS:
         return None
     inliers = away * (u - median(u)) >= 0
     for _ in range(2):
         intercept, slope = line(u[inliers], w[inliers])
         residual = w - (intercept + slope * u)
-        inliers = np.abs(residual) <= max(3 * noise(residual), SURFACE_BAND_M)
+        inliers = np.abs(residual) <= max(3 * noise(residual[inliers]), SURFACE_BAND_M)
         if np.count_nonzero(inliers) < MIN_SIDE_POINTS:
             return None
-    if fraction(inliers) < MIN_INLIER_FRACTION:
+    if fraction(inliers) < min_fraction:
         return None
     intercept, slope = line(u[inliers], w[inliers])
     return intercept, slope, noise(w[inliers] - (intercept + slope * u[inliers]))
