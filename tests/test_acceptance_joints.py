@@ -8,7 +8,7 @@ position error <= 0.5 mm; >= 95 % of the seen seam within 2 mm of the path; mean
 error <= 3 degrees; in a scene with two kinds (a lap and a fillet, a V-groove and a square
 butt), each seam named by its own. Known gaps are strict xfails: when a change closes one, its
 test fails until the mark is removed, so the list stays the truth about what the planner does.
-Seeds 0-4; today 176 of the 220 criteria hold (lap, bevel, outside corner, square butt, tack
+Seeds 0-4; today 175 of the 220 criteria hold (lap, bevel, outside corner, square butt, tack
 welds and the two-kind scenes mostly; pipe on plate, saddle and the shallow valley least), and
 every seam of the two-kind scenes gets its own kind.
 """
@@ -36,6 +36,9 @@ KNOWN_GAPS: dict[tuple[str, int], set[str]] = {
     # Two traces of the seam reach its end; the longer, kept, took three fits 2-3 mm off at its
     # ends (mean 0.60 mm): trim_overlaps keeps the longest of duplicates, not the best fitted.
     ("bevel", 4): {"position"},
+    # A face bowing over 1 mm is no plate's (what keeps a pipe's front from passing for a roof):
+    # the ripple bows this scene's faces so in a few sections, and the trace stops there.
+    ("outside_corner", 3): {"coverage"},
     ("outside_corner", 4): {"position"},
     ("pipe_on_plate", 0): {"coverage"},
     ("pipe_on_plate", 1): {"position", "axis"},

@@ -41,6 +41,9 @@ MAX_ROOF_DEG = 140.0
 MIN_FACE_M = 0.006
 MIN_INLIER_FRACTION = 0.7
 SURFACE_BAND_M = 0.0012
+# A plate's face is flat: one bowing more than this over its extent (and than its noise) is a
+# curved part's surface (a pipe seen across its silhouette), no plate (_curved).
+MAX_SAGITTA_M = 0.001
 # A face is only as long as the stretch its points fill from its edge with gaps of at most this.
 MAX_FACE_SPACING_M = 0.002
 # The V's opening at the surface (m): a wider gap between the faces is a dropout or two parts.
@@ -209,10 +212,24 @@ def _face(u: np.ndarray, w: np.ndarray, away: int, min_fraction: float) -> tuple
         inliers = np.abs(residual) <= max(3 * noise(residual[inliers]), SURFACE_BAND_M)
         if np.count_nonzero(inliers) < MIN_SIDE_POINTS:
             return None
-    if fraction(inliers) < min_fraction:
+    if fraction(inliers) < min_fraction or _curved(u[inliers], w[inliers]):
         return None
     intercept, slope = line(u[inliers], w[inliers])
     return intercept, slope, noise(w[inliers] - (intercept + slope * u[inliers]))
+
+
+def _curved(u: np.ndarray, w: np.ndarray) -> bool:
+    """Whether a face's points bow off a line: the sagitta |c| (L/2)^2 of the parabola w = a + b u
+    + c u^2 through them over their extent L exceeds max(3 sigma, MAX_SAGITTA_M), sigma the noise
+    about the parabola. The band around a face's line follows its own residuals, and a pipe's arc
+    seen across (a 20 mm chord of a 28 mm radius bows 1.8 mm) then passes for two plates' faces."""
+    half = np.ptp(u) / 2
+    if len(u) < 4 or half <= 0:
+        return False
+    across = (u - u.mean()) / half  # -1..1: a well-conditioned design
+    design = np.column_stack([np.ones_like(across), across, across * across])
+    coefficients = np.linalg.lstsq(design, w, rcond=None)[0]
+    return abs(coefficients[2]) > max(3 * noise(w - design @ coefficients), MAX_SAGITTA_M)
 
 
 def _face_end(u: np.ndarray, away: int) -> tuple[float, float, float]:
