@@ -84,10 +84,8 @@ def _condition(state: PlanState, c: PlanConfig) -> None:
 
 def _smooth(state: PlanState, c: PlanConfig) -> None:
     if c.smooth.enabled:
-        state.working = smooth.smooth_points(
-            state.working, state.neighbourhoods(c.smooth.radius_m), radius_m=c.smooth.radius_m,
-            range_sigma_m=c.smooth.range_sigma_m,
-        )
+        state.working = smooth.smooth_points(state.working, state.neighbourhoods(c.smooth.radius_m),
+                                             radius_m=c.smooth.radius_m, range_sigma_m=c.smooth.range_sigma_m)
     state.dump("smooth", state.working, None)
 
 
@@ -123,6 +121,10 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
             found, too_short = _clusters(state, c, segment.dense_selection(graph, side, c.segment.min_density))
             state.creases += found
             short += too_short
+        if c.segment.wide_valley_radius_m:
+            state.wide_valleys, too_short = segment.wide_valley_clusters(state.working, state.working_camera,
+                                                                         state.creases, c.segment)  # fmt: skip
+            short += too_short
     if c.segment.occluded_ends and state.scan.camera_origin_m is not None and state.camera.ndim == 1:
         # One camera: rims past whose end it sees a wall's top; the view buffer is kept for one_face.
         state.view = occlusion.ViewBuffer.build(state.fine, state.camera, c.condition.voxel_m)
@@ -134,7 +136,7 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
     state.short_candidates = [replace(candidates.cluster_candidate(state.working[members]), rejection=Rejection.TOO_SHORT)
                               for members in short]  # fmt: skip
     state.working_tree = cKDTree(state.working)
-    chosen = [*state.clusters, *state.creases]
+    chosen = [*state.clusters, *state.creases, *state.wide_valleys]
     state.dump("segment", state.working[np.concatenate(chosen)] if chosen else np.empty((0, 3)), None)
 
 
@@ -146,9 +148,8 @@ def _crease_threshold(c: PlanConfig, variant: str) -> float:
 
 
 def _clusters(state: PlanState, c: PlanConfig, selected: np.ndarray):
-    return segment.cluster_candidates(
-        state.working, selected, tolerance_m=c.segment.cluster_tolerance_m, min_length_m=c.segment.min_seam_length_m
-    )
+    return segment.cluster_candidates(state.working, selected, tolerance_m=c.segment.cluster_tolerance_m,
+                                      min_length_m=c.segment.min_seam_length_m)
 
 
 def _support(state: PlanState, c: PlanConfig) -> None:
@@ -194,14 +195,14 @@ def _pairing(state: PlanState, c: PlanConfig) -> None:
             midpoints = state.working[members]
         state.centre_points.append(midpoints)
         state.dump("pairing", midpoints, None)
-    state.centre_points += [state.working[members] for members in state.creases]
+    state.centre_points += [state.working[members] for members in [*state.creases, *state.wide_valleys]]
 
 
 def _thinning(state: PlanState, c: PlanConfig) -> None:
-    # All candidates at once: see thin_points.
-    state.centre_points = thinning.thin_points(
-        state.centre_points, radius_m=c.thinning.radius_m, iterations=c.thinning.iterations
-    )
+    # All candidates at once (see thin_points); a wide valley's band at half the radius it was found over.
+    radii = [c.thinning.radius_m] * (len(state.centre_points) - len(state.wide_valleys))
+    radii += [(c.segment.wide_valley_radius_m or 0.0) / 2] * len(state.wide_valleys)
+    state.centre_points = thinning.thin_points(state.centre_points, radius_m=radii, iterations=c.thinning.iterations)
     for thinned in state.centre_points:
         state.dump("thinning", thinned, None)
 
