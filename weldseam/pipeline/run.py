@@ -233,8 +233,8 @@ def _probe(state: PlanState, c: PlanConfig) -> None:
 
 def _trace(state: PlanState, c: PlanConfig) -> None:
     """The chains on the seams their probes find first (probe.tracing_order), each probed chain
-    traced; a chain within face_radius / 2 of the opening of a groove traced before is skipped. The
-    pieces are then taken in chain order."""
+    traced (a wide valley's, last in chain_cluster, following its fits); a chain within face_radius / 2
+    of the opening of a groove traced before is skipped. The pieces are then taken in chain order."""
     chains = state.chains
     by_length = sorted(range(len(chains)), key=lambda k: probe.tracing_order(chains[k], state.probes[k]))
     pieces: dict[int, list[trace.TracedSeam]] = {}
@@ -248,7 +248,8 @@ def _trace(state: PlanState, c: PlanConfig) -> None:
         elif trace.inside_traced(chains[k].points, traced_so_far, c.joints.face_radius_m / 2):
             rejected[k] = Rejection.INSIDE_SEAM
         else:
-            found = trace.trace_chain(chains[k], state.approx_axes[k], state.probes[k], state.surface, c.trace)
+            found = trace.trace_chain(chains[k], state.approx_axes[k], state.probes[k], state.surface, c.trace,
+                                      follow_fits=state.chain_cluster[k] >= len(state.clusters) + len(state.creases))
             pieces[k] = [replace(seam, sources=frozenset({k})) for seam in found]
             traced_so_far += pieces[k]
             if not found:
