@@ -33,13 +33,20 @@ def next_fit(extension: Extension, last_point, last_axis, direction, bend, templ
     the prediction drifts by 1-3 mm; the bound follows curves of radius down to ~40 mm across the
     largest gap), and within max(half a step, 20 % of the distance) along the torch axis (the
     surface does not jump, a section that straddles the part's end face does; but an end tangent
-    fitted to end points that drift in depth leans into the work, 1-2 mm over a 12 mm gap)."""
+    fitted to end points that drift in depth leans into the work, 1-2 mm over a 12 mm gap).
+
+    Both bounds are widened by the fit's across_spread: a shallow corner's point is known that
+    much less well across than its faces are in depth, and where its fits scatter across (a
+    valley of 130-150 degrees in a sensor's ripple: 2-4 mm), the curve predicted through them
+    leans by as much, across and, as it rises or falls with them, in depth."""
     step = extension.params.step_m
     distance = step
     while distance <= extension.params.max_skip_m:
         predicted, travel = ahead(last_point, direction, bend, distance)
         fit, depth, sideways = section_at(extension, predicted, travel, last_axis, template)
-        near = sideways <= max(1.5 * step, 0.15 * distance) and depth <= max(0.5 * step, 0.2 * distance)
+        spread = fit.geometry.across_spread
+        near = (sideways <= max(1.5 * step, 0.15 * distance) * spread
+                and depth <= max(0.5 * step, 0.2 * distance) * spread)
         if fit.kind == extension.joint and near:
             return fit
         distance += step
