@@ -199,9 +199,8 @@ def _pairing(state: PlanState, c: PlanConfig) -> None:
 
 
 def _thinning(state: PlanState, c: PlanConfig) -> None:
-    # All candidates at once (see thin_points); a wide valley's band at half the radius it was found over.
-    radii = [c.thinning.radius_m] * (len(state.centre_points) - len(state.wide_valleys))
-    radii += [(c.segment.wide_valley_radius_m or 0.0) / 2] * len(state.wide_valleys)
+    radii = [c.thinning.radius_m] * (len(state.centre_points) - len(state.wide_valleys))  # all at once: thin_points
+    radii += [(c.segment.wide_valley_radius_m or 0.0) / 2] * len(state.wide_valleys)  # half a wide band's width
     state.centre_points = thinning.thin_points(state.centre_points, radius_m=radii, iterations=c.thinning.iterations)
     for thinned in state.centre_points:
         state.dump("thinning", thinned, None)
@@ -232,11 +231,12 @@ def _probe(state: PlanState, c: PlanConfig) -> None:
 
 
 def _trace(state: PlanState, c: PlanConfig) -> None:
-    """The chains on the seams their probes find first (probe.tracing_order), each probed chain
-    traced (a wide valley's, last in chain_cluster, following its fits); a chain within face_radius / 2
-    of the opening of a groove traced before is skipped. The pieces are then taken in chain order."""
-    chains = state.chains
-    by_length = sorted(range(len(chains)), key=lambda k: probe.tracing_order(chains[k], state.probes[k]))
+    """The chains on the seams their probes find first (probe.tracing_order; wide valleys' last), each
+    traced; a chain within face_radius / 2 of the opening of a groove traced before is skipped. The
+    pieces are then taken in chain order."""
+    chains, wide = state.chains, len(state.clusters) + len(state.creases)
+    by_length = sorted(range(len(chains)), key=lambda k: (state.chain_cluster[k] >= wide,
+                                                          probe.tracing_order(chains[k], state.probes[k])))
     pieces: dict[int, list[trace.TracedSeam]] = {}
     traced_so_far: list[trace.TracedSeam] = []
     rejected: dict[int, Rejection] = {}
@@ -249,7 +249,7 @@ def _trace(state: PlanState, c: PlanConfig) -> None:
             rejected[k] = Rejection.INSIDE_SEAM
         else:
             found = trace.trace_chain(chains[k], state.approx_axes[k], state.probes[k], state.surface, c.trace,
-                                      follow_fits=state.chain_cluster[k] >= len(state.clusters) + len(state.creases))
+                                      follow_fits=state.chain_cluster[k] >= wide)
             pieces[k] = [replace(seam, sources=frozenset({k})) for seam in found]
             traced_so_far += pieces[k]
             if not found:
