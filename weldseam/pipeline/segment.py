@@ -8,7 +8,7 @@ from scipy.spatial import cKDTree
 
 from weldseam.config import SegmentConfig
 from weldseam.pipeline.descriptor import gradient_descriptor, valley_depth
-from weldseam.pipeline.grid import voxel_centroids
+from weldseam.pipeline.grid import voxel_centroids, voxel_indices
 from weldseam.pipeline.neighbours import neighbour_mean, radius_graph
 from weldseam.pipeline.normals import orient_toward, pca_normals
 
@@ -89,16 +89,20 @@ def wide_valleys(points: np.ndarray, camera: np.ndarray, *, radius_m: float, min
     at its bottom, is as deep over a few millimetres as a sensor's ripple, but stands out over a
     centimetre or two. Valley depth, its automatic threshold (the ideal crease of
     `min_crease_deg` at that scale), the noise floor and the density rule as in the fine pass,
-    computed on voxel centroids radius_m / WIDE_NEIGHBOUR_SPACINGS apart; each point takes its
-    nearest centroid's answer."""
+    computed on the centroids of voxels radius_m / WIDE_NEIGHBOUR_SPACINGS wide; each point takes
+    its voxel's answer (a centroid is seen from its first point's camera)."""
     spacing_m = radius_m / WIDE_NEIGHBOUR_SPACINGS
     coarse = voxel_centroids(points, spacing_m)
     if len(coarse) < 3:
         return np.zeros(len(points), dtype=bool)
-    nearest_point = cKDTree(points).query(coarse)[1]
-    graph = radius_graph(coarse, radius_m)
+    voxel = voxel_indices(points, spacing_m)
     camera = np.asarray(camera)
-    normals = orient_toward(pca_normals(coarse, graph), coarse, camera[nearest_point] if camera.ndim == 2 else camera)
+    if camera.ndim == 2:
+        first = np.empty(len(coarse), np.intp)
+        first[voxel[::-1]] = np.arange(len(points))[::-1]
+        camera = camera[first]
+    graph = radius_graph(coarse, radius_m)
+    normals = orient_toward(pca_normals(coarse, graph), coarse, camera)
     depth = valley_depth(coarse, normals, graph)
     threshold = max(
         automatic_threshold(spacing_m=spacing_m, normals_radius_m=radius_m, descriptor_radius_m=radius_m,
@@ -106,7 +110,7 @@ def wide_valleys(points: np.ndarray, camera: np.ndarray, *, radius_m: float, min
         noise_floor(depth, noise_factor),
     )
     selected = dense_selection(graph, depth > threshold, min_density)
-    return selected[cKDTree(coarse).query(points)[1]]
+    return selected[voxel]
 
 
 def wide_valley_clusters(
