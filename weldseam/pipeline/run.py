@@ -200,7 +200,7 @@ def _pairing(state: PlanState, c: PlanConfig) -> None:
 
 def _thinning(state: PlanState, c: PlanConfig) -> None:
     radii = [c.thinning.radius_m] * (len(state.centre_points) - len(state.wide_valleys))  # all at once: thin_points
-    radii += [(c.segment.wide_valley_radius_m or 0.0) / 2] * len(state.wide_valleys)  # half a wide band's width
+    radii += [c.segment.wide_valley_radius_m / 2] * len(state.wide_valleys)  # half a wide band's width
     state.centre_points = thinning.thin_points(state.centre_points, radius_m=radii, iterations=c.thinning.iterations)
     for thinned in state.centre_points:
         state.dump("thinning", thinned, None)
