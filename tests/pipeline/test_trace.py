@@ -97,3 +97,5 @@ def test_a_shallow_corners_points_may_scatter_farther_across_than_a_square_ones(
     shallow = JointGeometry(included_deg=140.0).across_spread
     assert not consistent(positions, axes, 0.0015 * square, 8.0)[7]
     assert consistent(positions, axes, 0.0015 * shallow, 8.0)[7]
+    assert abs(shallow - 1 / np.tan(np.radians(20.0))) < 1e-9 and square == 1.0
+    assert JointGeometry(opening_m=0.012, included_deg=120.0).across_spread == 1.0, "a groove's point is between edges"
