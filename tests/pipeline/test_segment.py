@@ -1,11 +1,12 @@
 import numpy as np
 
 from tests.test_pipeline_helpers import crease_points
+from weldseam.config import SegmentConfig
 from weldseam.pipeline.descriptor import gradient_descriptor, valley_depth
 from weldseam.pipeline.neighbours import radius_graph
 from weldseam.pipeline.normals import estimate_normals
 from weldseam.pipeline.segment import (
-    automatic_threshold, cluster_candidates, covered, dense_selection, noise_floor, wide_valleys,
+    automatic_threshold, band_points, cluster_candidates, covered, dense_selection, noise_floor, wide_valleys,
 )
 
 SPACING = 0.0025
@@ -107,3 +108,9 @@ def test_a_wide_valley_is_covered_by_one_fine_crease_along_it_not_by_pieces_besi
     assert not covered(points, wide, [crease_aside], tolerance_m=0.006)
     pieces = [crease_on_it[k : k + 10] for k in range(0, len(along), 10)]  # four pieces, each a quarter
     assert not covered(points, wide, pieces, tolerance_m=0.006)
+
+
+def test_a_wide_valleys_band_is_merged_into_voxels_a_quarter_of_its_radius(rng):
+    band = rng.uniform([0.0, -0.01, 0.0], [0.06, 0.01, 0.001], (2000, 3))
+    merged = band_points(band, SegmentConfig())
+    assert 10 < len(merged) < 200 and np.abs(merged[:, 1]).max() < 0.01

@@ -178,8 +178,7 @@ def _boundary(state: PlanState, c: PlanConfig) -> None:
 
 def _pairing(state: PlanState, c: PlanConfig) -> None:
     """Rim points paired across each descriptor band, their midpoints the candidate's centre points
-    (the band itself where it is too narrow to pair); a valley or ridge band lies on both sides of
-    its crease line, and its points are the centre points as they are."""
+    (the band itself where too narrow to pair); a valley or ridge band's points (a wide one's merged)."""
     for members, rim in zip(state.clusters, state.rims):
         in_cluster = np.zeros(len(state.working), dtype=bool)
         in_cluster[members] = True
@@ -195,7 +194,8 @@ def _pairing(state: PlanState, c: PlanConfig) -> None:
             midpoints = state.working[members]
         state.centre_points.append(midpoints)
         state.dump("pairing", midpoints, None)
-    state.centre_points += [state.working[members] for members in [*state.creases, *state.wide_valleys]]
+    state.centre_points += [state.working[members] for members in state.creases]
+    state.centre_points += [segment.band_points(state.working[members], c.segment) for members in state.wide_valleys]
 
 
 def _thinning(state: PlanState, c: PlanConfig) -> None:

@@ -128,6 +128,13 @@ def wide_valley_clusters(
             if not covered(points, members, fine_creases, params.cluster_tolerance_m)], too_short
 
 
+def band_points(points: np.ndarray, params: SegmentConfig) -> np.ndarray:
+    """A wide valley's band (N, 3) merged into voxels a quarter of params.wide_valley_radius_m wide:
+    thinned over half that radius, its working points would each have ~50 neighbours, and its
+    centre line is no finer than that anyway."""
+    return voxel_centroids(points, params.wide_valley_radius_m / 4)
+
+
 def covered(points: np.ndarray, members: np.ndarray, candidates: list[np.ndarray], tolerance_m: float,
             share: float = 0.5) -> bool:
     """Whether one of `candidates` (index arrays into `points` (N, 3)) lies within `tolerance_m`
