@@ -84,6 +84,10 @@ class SegmentConfig:
     min_density: float = _param(
         0.25, "valleys: a point counts when this share of its neighbours bends the same way (noise is scattered)"
     )
+    wide_valley_radius_m: float = _param(
+        0.02, "valleys: also seek valleys over this radius (a shallow valley between tubes is no deeper than "
+        "a sensor's ripple over descriptor.radius_m); 0: off"
+    )
     occluded_ends: bool = _param(
         True, "a single view: also take surface ends past which the camera sees a wall's top (a T-joint seen from "
         "above, its web's face too oblique to measure) as candidates"

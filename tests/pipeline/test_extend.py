@@ -6,14 +6,14 @@ import pytest
 from tests.pipeline.test_section import surface_of
 from weldseam.config import ExtendConfig
 from weldseam.geometry import polyline_length
-from weldseam.pipeline.ends import end_curve
+from weldseam.pipeline.ends import end_curve, seam_line
 from weldseam.pipeline import extend
 from weldseam.pipeline.extend import extend_seam, extend_seams
 from weldseam.pipeline.holes import HOLE_EDGE_M, hole_aim
 from weldseam.pipeline.parallel import worker_process
 from weldseam.pipeline.section import PointFlag, SectionFit
 from weldseam.pipeline.seek import Extension
-from weldseam.pipeline.joints import JointKind
+from weldseam.pipeline.joints import JointGeometry, JointKind
 from weldseam.pipeline.trace import TracedSeam
 
 RING_RADIUS_M = 0.05
@@ -359,3 +359,33 @@ def test_an_extension_past_an_end_that_drifts_sideways_goes_on_along_the_seams_l
     # As in the dropout test, the last sections straddle the plate end; before them, on the groove.
     assert np.abs(beyond[beyond[:, 0] < -0.012, 1]).max() < 0.0005, "on the groove, not on the drift's continuation"
 
+
+def rippled_valley_plate(rng, included_deg=140.0, pitch=0.0008):
+    """Two faces meeting in a valley of `included_deg` along x (0-150 mm) at y = 0, under a
+    sensor's 1.5 mm of ripple (three waves of 8-20 mm) and 0.2 mm noise."""
+    x, y = grid((0.0, 0.15), (-0.035, 0.035), pitch)
+    z = np.tan(np.radians((180.0 - included_deg) / 2)) * np.abs(y)
+    for wave_m, amplitude_m, angle in ((0.02, 0.0007, 0.3), (0.013, 0.0005, 1.9), (0.008, 0.0003, 2.6)):
+        z = z + amplitude_m * np.sin((x * np.cos(angle) + y * np.sin(angle)) * 2 * np.pi / wave_m)
+    return np.column_stack([x, y, z + rng.normal(0, 0.0002, len(x))])
+
+
+# A shallow valley's corner as sections in ripple find it: 4 mm across from one to the next.
+SCATTERED_ACROSS_M = np.array([0.0, 0.3, 0.8, 4.0, 3.5, 3.2, -0.7]) / 1000
+
+
+def test_an_extension_follows_a_shallow_rippled_valley_whose_corner_scatters_across(rng):
+    along = np.linspace(0.012, 0.027, len(SCATTERED_ACROSS_M))
+    seam = TracedSeam(np.column_stack([along, SCATTERED_ACROSS_M, np.zeros(len(along))]),
+                      np.tile([0.0, 0.0, -1.0], (len(along), 1)), False, JointKind.FILLET, 1.0,
+                      across_spread=JointGeometry(included_deg=140.0).across_spread)
+    positions = extended(seam, rippled_valley_plate(rng))
+    assert positions[:, 0].max() > 0.14, "to the valley's end, 150 mm"
+    assert np.abs(positions[:, 1]).max() < 0.006, "on the valley: a 140-degree corner's scatter across"
+
+
+def test_the_line_through_scattered_end_points_keeps_the_seams_direction_where_their_curve_does_not():
+    along = np.linspace(0.012, 0.027, len(SCATTERED_ACROSS_M))
+    points = np.column_stack([along, SCATTERED_ACROSS_M, np.zeros(len(along))])
+    assert seam_line(points).direction @ [1.0, 0.0, 0.0] > np.cos(np.radians(8.0))
+    assert end_curve(points)[0] @ [1.0, 0.0, 0.0] < np.cos(np.radians(30.0)), "the quadratic follows the scatter"

@@ -1,6 +1,6 @@
 import numpy as np
 
-from weldseam.pipeline.grid import voxel_centroids
+from weldseam.pipeline.grid import voxel_centroids, voxel_indices
 
 
 def test_points_in_one_leaf_merge_to_their_centroid_and_leaves_apart_stay_apart(rng):
@@ -18,3 +18,11 @@ def test_the_grid_does_not_depend_on_the_order_of_the_points(rng):
     once = voxel_centroids(points, 0.003)
     shuffled = voxel_centroids(points[rng.permutation(len(points))], 0.003)
     assert np.allclose(once, shuffled, atol=1e-15)
+
+
+def test_each_point_s_voxel_index_is_that_of_its_centroid(rng):
+    points = rng.uniform(0.0, 0.1, (20_000, 3))
+    centroids, index = voxel_centroids(points, 0.008), voxel_indices(points, 0.008)
+    assert index.shape == (len(points),) and index.max() == len(centroids) - 1
+    for voxel in (0, len(centroids) // 2, len(centroids) - 1):
+        assert np.allclose(centroids[voxel], points[index == voxel].mean(axis=0))

@@ -1,10 +1,13 @@
 import numpy as np
 
 from tests.test_pipeline_helpers import crease_points
-from weldseam.pipeline.descriptor import gradient_descriptor
+from weldseam.config import SegmentConfig
+from weldseam.pipeline.descriptor import gradient_descriptor, valley_depth
 from weldseam.pipeline.neighbours import radius_graph
 from weldseam.pipeline.normals import estimate_normals
-from weldseam.pipeline.segment import automatic_threshold, cluster_candidates, dense_selection, noise_floor
+from weldseam.pipeline.segment import (
+    automatic_threshold, band_points, cluster_candidates, covered, dense_selection, noise_floor, wide_valleys,
+)
 
 SPACING = 0.0025
 RADIUS = 0.006
@@ -54,3 +57,60 @@ def test_the_noise_floor_is_the_robust_sigma_times_the_factor(rng):
     values = rng.normal(0.0, 0.0002, 100_000)
     values[:500] = 0.01  # a few creases do not move it
     assert abs(noise_floor(values, 2.0) - 0.0004) < 0.00001
+
+
+def rippled_valley(rng, included_deg):
+    """A 120 x 120 mm sheet at SPACING: two faces meeting along y at `included_deg`, the valley
+    rounded over 10 mm, with a sensor's 1 mm ripple (8-20 mm waves) and 0.3 mm noise; its points
+    and their distance (m) across the valley line."""
+    ticks = np.arange(-0.06, 0.06, SPACING)
+    u, v = (grid.ravel() for grid in np.meshgrid(ticks, ticks, indexing="ij"))
+    slope = np.tan(np.radians((180.0 - included_deg) / 2))
+    height = slope * np.sqrt(u * u + 0.01**2)
+    for wave_m, amplitude_m in ((0.02, 0.0006), (0.013, 0.0005), (0.008, 0.0003)):
+        angle = rng.uniform(0, np.pi)
+        height += amplitude_m * np.sin((u * np.cos(angle) + v * np.sin(angle)) * 2 * np.pi / wave_m + rng.uniform(0, 6.3))
+    height += rng.normal(0, 0.0003, len(u))
+    return np.column_stack([u, v, height]), np.abs(u)
+
+
+def test_a_shallow_rippled_valley_is_found_over_the_wide_radius_not_the_fine_one(rng):
+    """A 140-degree valley between two curved parts, rounded and in 1 mm ripple: over the fine
+    radius its depth is lost in the ripple (scattered picks all over the sheet), over the wide
+    radius it stands out along its whole length, on its line."""
+    points, across = rippled_valley(rng, 140.0)
+    camera = np.array([0.0, 0.0, 0.5])
+    graph = radius_graph(points, RADIUS)
+    depth = valley_depth(points, estimate_normals(points, graph, camera_origin_m=camera), graph)
+    fine = depth > max(automatic_threshold(spacing_m=SPACING, normals_radius_m=RADIUS, descriptor_radius_m=RADIUS,
+                                           variant="valley", min_crease_deg=20), noise_floor(depth, 2.0))
+    fine = dense_selection(graph, fine, 0.25)
+    wide = wide_valleys(points, camera, radius_m=0.02, min_crease_deg=20, noise_factor=2.0, min_density=0.25)
+    on_line = points[wide & (across < 0.012)]
+    assert np.ptp(on_line[:, 1]) > 0.09  # along the valley's 120 mm, less its ends
+    assert (across[wide] < 0.012).mean() > 0.9  # a band two 8 mm voxels wide
+    assert fine.sum() < 0.2 * wide.sum()
+
+
+def test_no_wide_valley_on_a_rippled_plate(rng):
+    points, _ = rippled_valley(rng, 180.0)
+    assert not wide_valleys(points, np.array([0.0, 0.0, 0.5]), radius_m=0.02, min_crease_deg=20, noise_factor=2.0,
+                            min_density=0.25).any()
+
+
+def test_a_wide_valley_is_covered_by_one_fine_crease_along_it_not_by_pieces_beside_it():
+    along = np.arange(0.0, 0.1, 0.0025)
+    line = np.column_stack([along, np.zeros_like(along), np.zeros_like(along)])
+    points = np.vstack([line, line + [0.0, 0.004, 0.0], line + [0.0, 0.02, 0.0]])
+    wide = np.arange(len(along))
+    crease_on_it, crease_aside = wide + len(along), wide + 2 * len(along)
+    assert covered(points, wide, [crease_aside, crease_on_it], tolerance_m=0.006)
+    assert not covered(points, wide, [crease_aside], tolerance_m=0.006)
+    pieces = [crease_on_it[k : k + 10] for k in range(0, len(along), 10)]  # four pieces, each a quarter
+    assert not covered(points, wide, pieces, tolerance_m=0.006)
+
+
+def test_a_wide_valleys_band_is_merged_into_voxels_a_quarter_of_its_radius(rng):
+    band = rng.uniform([0.0, -0.01, 0.0], [0.06, 0.01, 0.001], (2000, 3))
+    merged = band_points(band, SegmentConfig())
+    assert 10 < len(merged) < 200 and np.abs(merged[:, 1]).max() < 0.01

@@ -44,3 +44,14 @@ def test_thinning_stops_once_the_points_have_settled(rng, monkeypatch):
     assert np.abs(thinned_line - line).max() < 1e-9 and np.abs(thinned_band - scattered).max() > 1e-4
     # The neighbour count and one iteration that moves nothing search the line; the band goes on.
     assert searched.count(len(line)) == 2 and len(searched) > 4
+
+
+def test_each_set_is_thinned_over_its_own_radius(rng):
+    """A band 20 mm wide (a wide valley's, found over a 20 mm radius) gathers on its centre line
+    when thinned over half its width, not over the 5 mm a descriptor band is thinned over."""
+    along, across = np.meshgrid(np.arange(0.0, 0.06, 0.0025), np.arange(-0.01, 0.01001, 0.0025))
+    band = np.column_stack([along.ravel(), across.ravel(), np.zeros(along.size)]) + rng.normal(0, 0.0003, (along.size, 3))
+    fine, wide = thin_points([band, band], radius_m=[0.005, 0.01], iterations=20)
+    inner = (band[:, 0] > 0.01) & (band[:, 0] < 0.05)  # every point is kept: thinned point k is band point k
+    assert np.abs(wide[inner, 1]).max() < 0.0005
+    assert np.abs(fine[inner, 1]).max() > 0.001

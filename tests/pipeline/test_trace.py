@@ -1,10 +1,10 @@
 import numpy as np
 
 from weldseam.config import TraceConfig
-from weldseam.pipeline.joints import JointKind
+from weldseam.pipeline.joints import JointGeometry, JointKind
 from weldseam.pipeline.order import Chain
 from weldseam.pipeline.section import SectionFit
-from weldseam.pipeline.trace import TracedSeam, inside_traced, trace_chain
+from weldseam.pipeline.trace import TracedSeam, consistent, inside_traced, on_fits, trace_chain
 
 STEP_M = 0.002
 
@@ -57,3 +57,45 @@ def test_sections_another_model_explains_better_are_fitted_again_as_the_chains_j
     (seam,) = trace_chain(chain, axes, {}, ModelsSurface(), TraceConfig())
     assert seam.joint == JointKind.V_GROOVE
     assert len(seam.positions_m) == len(along) and np.abs(seam.positions_m[:, 1]).max() < 1e-12
+
+
+class ValleySurface:
+    """A stand-in FineSurface with a corner of 140 degrees along y = 0: a section within 2 mm of it
+    fits it (the seam point on it, right under the section's centre); one farther off fits it only
+    every other time (the corner is lost in the ripple when the window is off it)."""
+
+    def fit_many(self, centres, travel, axes, lateral, kinds=None):
+        fits = []
+        for centre in centres:
+            found = abs(centre[1]) <= 0.002 or round(centre[0] / STEP_M) % 2 == 0
+            point = np.array([centre[0], 0.0, 0.0])
+            fits.append(SectionFit(JointKind.FILLET if found else None, point, np.array([0.0, 0.0, -1.0]),
+                                   JointGeometry(included_deg=140.0)))
+        return fits
+
+
+def test_a_chain_beside_the_seam_its_sections_find_is_traced_again_on_that_seam():
+    along = np.arange(0.0, 0.06, STEP_M)
+    beside = Chain(np.column_stack([along, np.full(len(along), 0.004), np.zeros(len(along))]), False)
+    axes = np.tile([0.0, 0.0, -1.0], (len(along), 1))
+    assert not trace_chain(beside, axes, {}, ValleySurface(), TraceConfig()), "half its sections fit from beside"
+    (seam,) = trace_chain(beside, axes, {}, ValleySurface(), TraceConfig(), follow_fits=True)
+    assert len(seam.positions_m) == len(along), "every section fits once across the line they found"
+    assert np.abs(seam.positions_m[:, 1]).max() < 1e-12
+    moved = on_fits(beside, ValleySurface().fit_many(beside.points, None, None, None), JointKind.FILLET)
+    assert np.abs(moved.points[:, 1]).max() < 1e-12 and np.allclose(moved.points[:, 0], along)
+    on_it = Chain(beside.points - [0.0, 0.004, 0.0], False)
+    assert on_fits(on_it, ValleySurface().fit_many(on_it.points, None, None, None), JointKind.FILLET) is None
+
+
+def test_a_shallow_corners_points_may_scatter_farther_across_than_a_square_ones():
+    along = np.arange(0.0, 0.03, STEP_M)
+    positions = np.column_stack([along, np.zeros(len(along)), np.zeros(len(along))])
+    positions[7, 1] = 0.0025  # 2.5 mm across
+    axes = np.tile([0.0, 0.0, -1.0], (len(along), 1))
+    square = JointGeometry(included_deg=90.0).across_spread
+    shallow = JointGeometry(included_deg=140.0).across_spread
+    assert not consistent(positions, axes, 0.0015 * square, 8.0)[7]
+    assert consistent(positions, axes, 0.0015 * shallow, 8.0)[7]
+    assert abs(shallow - 1 / np.tan(np.radians(20.0))) < 1e-9 and square == 1.0
+    assert JointGeometry(opening_m=0.012, included_deg=120.0).across_spread == 1.0, "a groove's point is between edges"

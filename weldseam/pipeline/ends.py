@@ -36,19 +36,25 @@ def end_curve(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     1/MIN_BEND_RADIUS_M. The seam ahead is predicted as p + d t + d^2 k / 2 (ahead). A chord
     or principal direction over that stretch of a curve of radius R leans back by baseline / 2R
     (0.1 rad over 12 mm at R = 60 mm), which is 0.2 mm sideways per 2 mm step."""
-    ordered = points[::-1]
-    arc = arc_lengths(ordered)
-    window = ordered[arc <= TANGENT_BASELINE_M]
+    window, design = _end_window(points)
     if len(window) < 5:
         return end_direction(points, at_start=False), np.zeros(3)
-    s = arc[: len(window)]
-    design = np.column_stack([np.ones_like(s), s, s * s])
     coefficients = np.linalg.lstsq(design, window, rcond=None)[0]
     tangent = unit(-coefficients[1])
     bend = 2 * coefficients[2]
     bend -= (bend @ tangent) * tangent
     size = np.linalg.norm(bend)
     return tangent, bend * min(1.0, 1.0 / (MIN_BEND_RADIUS_M * size)) if size > 0 else bend
+
+
+def _end_window(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The points (K, 3) of the last TANGENT_BASELINE_M of arc of `points` (in travel order), the
+    last first, and the design matrix [1, s, s^2] (K, 3) of their arc lengths s back from it."""
+    ordered = points[::-1]
+    arc = arc_lengths(ordered)
+    window = ordered[arc <= TANGENT_BASELINE_M]
+    s = arc[: len(window)]
+    return window, np.column_stack([np.ones_like(s), s, s * s])
 
 
 def ahead(last_point, direction, bend, distance_m: float) -> tuple[np.ndarray, np.ndarray]:

@@ -7,7 +7,8 @@ re-aimed by them:
 1. the next fit ahead (stepping over failed sections up to `max_skip_m`; a groove section in a
    dropout is bridged from the sections before: weldseam.pipeline.bridge), near the predicted
    curve or near the seam's straight line over its last stretch (the curve of a drifting end
-   turns off the seam; seek.next_fit);
+   turns off the seam; seek.next_fit), sought along the curve and, at a shallow corner whose fits
+   scatter across, along that line;
 2. a turn over a 90-degree edge (a groove over a block's edge, a seam up a wall: turn.py);
 3. a tack weld over the seam just ahead, crossed on the seam line (tacks.py);
 4. the part's end: where the scan sees past the part just ahead, the seam stops there;
@@ -28,7 +29,7 @@ from scipy.spatial import cKDTree
 from weldseam.config import ExtendConfig
 from weldseam.geometry import arc_lengths, bend_corner, polyline_length, unit
 from weldseam.pipeline.bridge import GrooveTemplate, groove_template, part_ends_ahead
-from weldseam.pipeline.ends import END_BASELINE_M, TANGENT_BASELINE_M, ahead, end_curve, seam_line
+from weldseam.pipeline.ends import END_BASELINE_M, TANGENT_BASELINE_M, SeamLine, ahead, end_curve, seam_line
 from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.parallel import map_shared
 from weldseam.pipeline.section import FineSurface, PointFlag, SectionFit, section_frames
@@ -46,6 +47,9 @@ TEMPLATE_MEMORY = 6
 # radius R by d^2 / 2R, 12.5 % of d at d = R / 4. The curve (a parabola, its bend clamped at 30 mm:
 # ends.MIN_BEND_RADIUS_M) stays within 8 % of d of a 50 mm ring for 34 mm, and of a 25 mm ring.
 ONE_FACE_DRIFT = 0.08
+# Where the line through a shallow corner's fitted end points and its curve's tangent differ by
+# more than this, the next fit is also sought along the line (SeamEnd.aims).
+LINE_AIM_DEG = 5.0
 
 
 @dataclass(frozen=True)
@@ -98,13 +102,15 @@ def extend_seam(seam: TracedSeam, surface: FineSurface, params: ExtendConfig) ->
     if seam.closed or len(seam.positions_m) < 2:
         return seam
     extension = Extension(surface, seam.joint, params)
-    start, start_stop = extend_end(extension, seam.positions_m[::-1], seam.torch_axes[::-1], seam.point_flags[::-1])
+    start, start_stop = extend_end(extension, seam.positions_m[::-1], seam.torch_axes[::-1], seam.point_flags[::-1],
+                                   seam.across_spread)
     before = _fits(start)[::-1]
     end, end_stop = extend_end(
         extension,
         np.array([f.point_m for f in before] + list(seam.positions_m)),
         np.array([f.torch_axis for f in before] + list(seam.torch_axes)),
         np.array([f.flags for f in before] + list(seam.point_flags), np.uint8),
+        seam.across_spread,
     )
     return _extended(seam, start, start_stop, end, end_stop)
 
@@ -117,7 +123,7 @@ def _extension_job(surface: FineSurface, job) -> tuple[list[Step], Step | None] 
         return extend_seam(seam, surface, params)
     order = slice(None, None, -1) if at_start else slice(None)
     return extend_end(Extension(surface, seam.joint, params), seam.positions_m[order], seam.torch_axes[order],
-                      seam.point_flags[order])  # fmt: skip
+                      seam.point_flags[order], seam.across_spread)  # fmt: skip
 
 
 def _fits(steps: list[Step]) -> list[SectionFit]:
@@ -157,8 +163,9 @@ def _extended(seam: TracedSeam, start: list[Step], start_stop, end: list[Step], 
 class SeamEnd:
     """An end being extended: its points, torch axes and which were bridged (travel order, the
     end last), where its current face begins (after a turn over an edge), the curve it is
-    predicted along, the groove templates of its fits (a groove only), and the curve at its last
-    fit with both faces seen: (index, direction, bend)."""
+    predicted along, the groove templates of its fits (a groove only), the curve at its last
+    fit with both faces seen: (index, direction, bend), and the across_spread of its last fit
+    (JointGeometry; at first the seam's)."""
 
     positions: list
     axes: list
@@ -169,6 +176,7 @@ class SeamEnd:
     templates: list = field(default_factory=list)
     face_start: int = 0
     last_full: tuple = ()
+    spread: float = 1.0
 
     @property
     def fitted(self) -> np.ndarray:
@@ -195,6 +203,17 @@ class SeamEnd:
         since = _arc_since_fit(self.positions, self.bridged)
         return unit(self.direction + since * self.bend), (self.bend if since > 0 else np.zeros(3))
 
+    def aims(self, line: SeamLine | None) -> list[tuple[np.ndarray, np.ndarray]]:
+        """(direction, bend) pairs to seek the next fit along: the heading, and at a shallow corner
+        (its last fit's across_spread over 1) where the straight `line` through this face's fitted
+        points (ends.seam_line) points more than LINE_AIM_DEG from it, that line: such a corner's
+        fits scatter a few mm across in a sensor's ripple, and the curve through the last of them
+        follows that scatter."""
+        heading = self.heading()
+        if self.spread <= 1.0 or line is None or line.direction @ heading[0] >= np.cos(np.radians(LINE_AIM_DEG)):
+            return [heading]
+        return [heading, (line.direction, np.zeros(3))]
+
     def template(self) -> GrooveTemplate | None:
         """Per side, and for the half-opening and the bottom, the median of the latest
         TEMPLATE_MEMORY templates that measured it (None for one measured in fewer than half of
@@ -216,6 +235,7 @@ class SeamEnd:
         self.positions += [f.point_m for f in step.fits]
         self.axes += [f.torch_axis for f in step.fits]
         self.bridged += [f.bridged for f in step.fits]
+        self.spread = step.fits[-1].geometry.across_spread
         if extension.joint == JointKind.V_GROOVE:
             self.templates += [groove_template(extension.surface, f, self.direction)
                                for f in step.fits if not f.bridged]  # fmt: skip
@@ -227,10 +247,12 @@ class SeamEnd:
             self.last_full = (len(self.positions) - 1, self.direction, self.bend)
 
 
-def extend_end(extension: Extension, seam_positions, seam_axes, seam_flags=None) -> tuple[list[Step], Step | None]:
-    """The steps that extend a seam (points and axes in travel order) beyond its last point
-    (see the module), and the step that stopped it where it came within two steps of the seam
-    away from this end (None if it stopped otherwise)."""
+def extend_end(
+    extension: Extension, seam_positions, seam_axes, seam_flags=None, spread: float = 1.0
+) -> tuple[list[Step], Step | None]:
+    """The steps that extend a seam (points and axes in travel order, `spread` its across_spread)
+    beyond its last point (see the module), and the step that stopped it where it came within two
+    steps of the seam away from this end (None if it stopped otherwise)."""
     positions = np.array(seam_positions)
     params = extension.params
     # The seam away from this end: an extension that reaches it has gone round a loop.
@@ -239,7 +261,7 @@ def extend_end(extension: Extension, seam_positions, seam_axes, seam_flags=None)
     elsewhere_tree = cKDTree(elsewhere) if len(elsewhere) else None
     end = SeamEnd(list(seam_positions), list(seam_axes), [False] * len(positions), *end_curve(positions), params.step_m,
                   templates=_end_templates(extension, positions, np.array(seam_axes)),
-                  last_full=_last_full(positions, seam_flags))  # fmt: skip
+                  last_full=_last_full(positions, seam_flags), spread=spread)  # fmt: skip
     steps: list[Step] = []
     for _ in range(int(params.max_extension_m / params.step_m)):
         step = next((found for strategy in STRATEGIES if (found := strategy(extension, end)) is not None), STOP)
@@ -267,10 +289,12 @@ def _next_step(extension: Extension, end: SeamEnd) -> Step | None:
     corner with one face unseen only near the curve of the last fit with both faces seen
     (SeamEnd.on_curve): past a pipe's silhouette the end of the plate seen is a shadow's edge,
     running off the pipe's foot along the line of sight."""
-    fit = next_fit(extension, end.positions[-1], end.axes[-1], end.heading(), end.template(), seam_line(end.fitted))
-    if fit is None or (fit.flags & PointFlag.ONE_FACE and not end.on_curve(fit.point_m)):
-        return None
-    return Step([fit])
+    line = seam_line(end.fitted)
+    for heading in end.aims(line):
+        fit = next_fit(extension, end.positions[-1], end.axes[-1], heading, end.template(), line)
+        if fit is not None and not (fit.flags & PointFlag.ONE_FACE and not end.on_curve(fit.point_m)):
+            return Step([fit])
+    return None
 
 
 def _turn_step(extension: Extension, end: SeamEnd) -> Step | None:

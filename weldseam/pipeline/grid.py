@@ -18,9 +18,7 @@ def voxel_centroids(points: np.ndarray, leaf_m: float) -> np.ndarray:
     """
     if len(points) == 0:
         return points.copy()
-    cells = np.floor((points - column_bounds(points)[0]) / leaf_m).astype(np.int64)
-    extent = column_bounds(cells)[1] + 1
-    keys = (cells[:, 0] * extent[1] + cells[:, 1]) * extent[2] + cells[:, 2]
+    keys = _voxel_keys(points, leaf_m)
     blocks = row_blocks(len(points))
     if len(blocks) == 1:
         return _centroids(points, keys)
@@ -34,6 +32,18 @@ def voxel_centroids(points: np.ndarray, leaf_m: float) -> np.ndarray:
         return _centroids(points[chosen], keys[chosen])
 
     return np.concatenate(run_parts(in_range, range(len(blocks))))
+
+
+def voxel_indices(points: np.ndarray, leaf_m: float) -> np.ndarray:
+    """(N,) the index of each point's voxel among voxel_centroids(points, leaf_m) (ascending key)."""
+    return np.unique(_voxel_keys(points, leaf_m), return_inverse=True)[1].reshape(-1)
+
+
+def _voxel_keys(points: np.ndarray, leaf_m: float) -> np.ndarray:
+    """(N,) int64 key of each point's voxel of edge `leaf_m`, from the cloud's minimum corner."""
+    cells = np.floor((points - column_bounds(points)[0]) / leaf_m).astype(np.int64)
+    extent = column_bounds(cells)[1] + 1
+    return (cells[:, 0] * extent[1] + cells[:, 1]) * extent[2] + cells[:, 2]
 
 
 def _centroids(points: np.ndarray, keys: np.ndarray) -> np.ndarray:

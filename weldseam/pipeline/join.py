@@ -175,6 +175,7 @@ def _joined(
                 joint=first.joint if len(a) >= len(b) else second.joint,
                 confidence=round(weight * first.confidence + (1 - weight) * second.confidence, 3),
                 half_opening_m=weight * first.half_opening_m + (1 - weight) * second.half_opening_m,
+                across_spread=weight * first.across_spread + (1 - weight) * second.across_spread,
                 sources=first.sources | second.sources,
                 flags=np.concatenate([flags_a, np.zeros(len(bend_points), np.uint8), flags_b]),
             ))

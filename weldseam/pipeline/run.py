@@ -84,10 +84,8 @@ def _condition(state: PlanState, c: PlanConfig) -> None:
 
 def _smooth(state: PlanState, c: PlanConfig) -> None:
     if c.smooth.enabled:
-        state.working = smooth.smooth_points(
-            state.working, state.neighbourhoods(c.smooth.radius_m), radius_m=c.smooth.radius_m,
-            range_sigma_m=c.smooth.range_sigma_m,
-        )
+        state.working = smooth.smooth_points(state.working, state.neighbourhoods(c.smooth.radius_m),
+                                             radius_m=c.smooth.radius_m, range_sigma_m=c.smooth.range_sigma_m)
     state.dump("smooth", state.working, None)
 
 
@@ -123,6 +121,10 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
             found, too_short = _clusters(state, c, segment.dense_selection(graph, side, c.segment.min_density))
             state.creases += found
             short += too_short
+        if c.segment.wide_valley_radius_m:
+            state.wide_valleys, too_short = segment.wide_valley_clusters(state.working, state.working_camera,
+                                                                         state.creases, c.segment)  # fmt: skip
+            short += too_short
     if c.segment.occluded_ends and state.scan.camera_origin_m is not None and state.camera.ndim == 1:
         # One camera: rims past whose end it sees a wall's top; the view buffer is kept for one_face.
         state.view = occlusion.ViewBuffer.build(state.fine, state.camera, c.condition.voxel_m)
@@ -134,7 +136,7 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
     state.short_candidates = [replace(candidates.cluster_candidate(state.working[members]), rejection=Rejection.TOO_SHORT)
                               for members in short]  # fmt: skip
     state.working_tree = cKDTree(state.working)
-    chosen = [*state.clusters, *state.creases]
+    chosen = [*state.clusters, *state.creases, *state.wide_valleys]
     state.dump("segment", state.working[np.concatenate(chosen)] if chosen else np.empty((0, 3)), None)
 
 
@@ -146,9 +148,8 @@ def _crease_threshold(c: PlanConfig, variant: str) -> float:
 
 
 def _clusters(state: PlanState, c: PlanConfig, selected: np.ndarray):
-    return segment.cluster_candidates(
-        state.working, selected, tolerance_m=c.segment.cluster_tolerance_m, min_length_m=c.segment.min_seam_length_m
-    )
+    return segment.cluster_candidates(state.working, selected, tolerance_m=c.segment.cluster_tolerance_m,
+                                      min_length_m=c.segment.min_seam_length_m)
 
 
 def _support(state: PlanState, c: PlanConfig) -> None:
@@ -177,8 +178,7 @@ def _boundary(state: PlanState, c: PlanConfig) -> None:
 
 def _pairing(state: PlanState, c: PlanConfig) -> None:
     """Rim points paired across each descriptor band, their midpoints the candidate's centre points
-    (the band itself where it is too narrow to pair); a valley or ridge band lies on both sides of
-    its crease line, and its points are the centre points as they are."""
+    (the band itself where too narrow to pair); a valley or ridge band's points (a wide one's merged)."""
     for members, rim in zip(state.clusters, state.rims):
         in_cluster = np.zeros(len(state.working), dtype=bool)
         in_cluster[members] = True
@@ -195,13 +195,13 @@ def _pairing(state: PlanState, c: PlanConfig) -> None:
         state.centre_points.append(midpoints)
         state.dump("pairing", midpoints, None)
     state.centre_points += [state.working[members] for members in state.creases]
+    state.centre_points += [segment.band_points(state.working[members], c.segment) for members in state.wide_valleys]
 
 
 def _thinning(state: PlanState, c: PlanConfig) -> None:
-    # All candidates at once: see thin_points.
-    state.centre_points = thinning.thin_points(
-        state.centre_points, radius_m=c.thinning.radius_m, iterations=c.thinning.iterations
-    )
+    radii = [c.thinning.radius_m] * (len(state.centre_points) - len(state.wide_valleys))  # all at once: thin_points
+    radii += [c.segment.wide_valley_radius_m / 2] * len(state.wide_valleys)  # half a wide band's width
+    state.centre_points = thinning.thin_points(state.centre_points, radius_m=radii, iterations=c.thinning.iterations)
     for thinned in state.centre_points:
         state.dump("thinning", thinned, None)
 
@@ -231,11 +231,12 @@ def _probe(state: PlanState, c: PlanConfig) -> None:
 
 
 def _trace(state: PlanState, c: PlanConfig) -> None:
-    """The chains on the seams their probes find first (probe.tracing_order), each probed chain
+    """The chains on the seams their probes find first (probe.tracing_order; wide valleys' last), each
     traced; a chain within face_radius / 2 of the opening of a groove traced before is skipped. The
     pieces are then taken in chain order."""
-    chains = state.chains
-    by_length = sorted(range(len(chains)), key=lambda k: probe.tracing_order(chains[k], state.probes[k]))
+    chains, wide = state.chains, len(state.clusters) + len(state.creases)
+    by_length = sorted(range(len(chains)), key=lambda k: (state.chain_cluster[k] >= wide,
+                                                          probe.tracing_order(chains[k], state.probes[k])))
     pieces: dict[int, list[trace.TracedSeam]] = {}
     traced_so_far: list[trace.TracedSeam] = []
     rejected: dict[int, Rejection] = {}
@@ -247,7 +248,8 @@ def _trace(state: PlanState, c: PlanConfig) -> None:
         elif trace.inside_traced(chains[k].points, traced_so_far, c.joints.face_radius_m / 2):
             rejected[k] = Rejection.INSIDE_SEAM
         else:
-            found = trace.trace_chain(chains[k], state.approx_axes[k], state.probes[k], state.surface, c.trace)
+            found = trace.trace_chain(chains[k], state.approx_axes[k], state.probes[k], state.surface, c.trace,
+                                      follow_fits=state.chain_cluster[k] >= wide)
             pieces[k] = [replace(seam, sources=frozenset({k})) for seam in found]
             traced_so_far += pieces[k]
             if not found:

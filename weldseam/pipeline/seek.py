@@ -41,15 +41,23 @@ def next_fit(extension: Extension, last_point, last_axis, heading, template: Gro
     seam's straight `line` (None: no such line) over its last stretch (ends.SeamLine): the curve's
     direction rests on the last few fits, and where those drift by a millimetre (the fits at a
     plate's end, beside a table) it turns 5-15 degrees off the seam, 3 mm sideways within two
-    steps; the line over TANGENT_BASELINE_M is not turned by them."""
+    steps; the line over TANGENT_BASELINE_M is not turned by them.
+
+    Every bound is widened by the fit's across_spread: a shallow corner's point is known that
+    much less well across than its faces are in depth, and where its fits scatter across (a
+    valley of 130-150 degrees in a sensor's ripple: 2-4 mm), the curve predicted through them
+    leans by as much, across and, as it rises or falls with them, in depth."""
     step = extension.params.step_m
     direction, bend = heading
     distance = step
     while distance <= extension.params.max_skip_m:
         predicted, travel = ahead(last_point, direction, bend, distance)
         fit, depth, sideways = section_at(extension, predicted, travel, last_axis, template)
-        near = sideways <= max(1.5 * step, 0.15 * distance) and depth <= max(0.5 * step, 0.2 * distance)
-        if fit.kind == extension.joint and (near or (line is not None and line.holds(fit.point_m, last_axis, step))):
+        spread = fit.geometry.across_spread
+        near = (sideways <= max(1.5 * step, 0.15 * distance) * spread
+                and depth <= max(0.5 * step, 0.2 * distance) * spread)
+        on_line = line is not None and line.holds(fit.point_m, last_axis, step * spread)
+        if fit.kind == extension.joint and (near or on_line):
             return fit
         distance += step
     return None

@@ -4,10 +4,17 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
 
+from weldseam.config import SegmentConfig
 from weldseam.pipeline.descriptor import gradient_descriptor, valley_depth
+from weldseam.pipeline.grid import voxel_centroids, voxel_indices
 from weldseam.pipeline.neighbours import neighbour_mean, radius_graph
-from weldseam.pipeline.normals import pca_normals
+from weldseam.pipeline.normals import orient_toward, pca_normals
+
+# The wide valley pass works on voxel centroids this many times closer than its radius (about as
+# many neighbours as the fine pass has at its own radius and spacing).
+WIDE_NEIGHBOUR_SPACINGS = 2.5
 
 
 def automatic_threshold(
@@ -73,3 +80,67 @@ def cluster_candidates(
         elif extent >= tolerance_m:
             short.append(members)
     return sorted(clusters, key=lambda members: (-len(members), int(members[0]))), short
+
+
+def wide_valleys(points: np.ndarray, camera: np.ndarray, *, radius_m: float, min_crease_deg: float,
+                 noise_factor: float, min_density: float) -> np.ndarray:
+    """(N,) bool: the points (N, 3) seen from `camera` ((3,) or (N, 3)) in a valley measured over
+    `radius_m`: a valley between two tubes or curved plates, 120-160 degrees included and rounded
+    at its bottom, is as deep over a few millimetres as a sensor's ripple, but stands out over a
+    centimetre or two. Valley depth, its automatic threshold (the ideal crease of
+    `min_crease_deg` at that scale), the noise floor and the density rule as in the fine pass,
+    computed on the centroids of voxels radius_m / WIDE_NEIGHBOUR_SPACINGS wide; each point takes
+    its voxel's answer (a centroid is seen from its first point's camera)."""
+    spacing_m = radius_m / WIDE_NEIGHBOUR_SPACINGS
+    coarse = voxel_centroids(points, spacing_m)
+    if len(coarse) < 3:
+        return np.zeros(len(points), dtype=bool)
+    voxel = voxel_indices(points, spacing_m)
+    camera = np.asarray(camera)
+    if camera.ndim == 2:
+        first = np.empty(len(coarse), np.intp)
+        first[voxel[::-1]] = np.arange(len(points))[::-1]
+        camera = camera[first]
+    graph = radius_graph(coarse, radius_m)
+    normals = orient_toward(pca_normals(coarse, graph), coarse, camera)
+    depth = valley_depth(coarse, normals, graph)
+    threshold = max(
+        automatic_threshold(spacing_m=spacing_m, normals_radius_m=radius_m, descriptor_radius_m=radius_m,
+                            variant="valley", min_crease_deg=min_crease_deg),
+        noise_floor(depth, noise_factor),
+    )
+    selected = dense_selection(graph, depth > threshold, min_density)
+    return selected[voxel]
+
+
+def wide_valley_clusters(
+    points: np.ndarray, camera: np.ndarray, fine_creases: list[np.ndarray], params: SegmentConfig
+) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """(clusters, too short) of the points (N, 3) seen from `camera` in a valley over
+    params.wide_valley_radius_m (wide_valleys; cluster_candidates), but those one of the fine
+    pass's valleys and ridges `fine_creases` covers (covered): a groove's bottom or a fillet's
+    corner is not sought twice, a valley the fine pass saw only in scattered pieces is."""
+    wide = wide_valleys(points, camera, radius_m=params.wide_valley_radius_m, min_crease_deg=params.min_crease_deg,
+                        noise_factor=params.noise_factor, min_density=params.min_density)  # fmt: skip
+    found, too_short = cluster_candidates(points, wide, tolerance_m=params.cluster_tolerance_m,
+                                          min_length_m=params.min_seam_length_m)  # fmt: skip
+    return [members for members in found
+            if not covered(points, members, fine_creases, params.cluster_tolerance_m)], too_short
+
+
+def band_points(points: np.ndarray, params: SegmentConfig) -> np.ndarray:
+    """A wide valley's band (N, 3) merged into voxels a quarter of params.wide_valley_radius_m wide:
+    thinned over half that radius, its working points would each have ~50 neighbours, and its
+    centre line is no finer than that anyway."""
+    return voxel_centroids(points, params.wide_valley_radius_m / 4)
+
+
+def covered(points: np.ndarray, members: np.ndarray, candidates: list[np.ndarray], tolerance_m: float,
+            share: float = 0.5) -> bool:
+    """Whether one of `candidates` (index arrays into `points` (N, 3)) lies within `tolerance_m`
+    of at least `share` of the points `members`."""
+    for other in candidates:
+        distance = cKDTree(points[other]).query(points[members], distance_upper_bound=tolerance_m)[0]
+        if np.mean(distance <= tolerance_m) >= share:
+            return True
+    return False

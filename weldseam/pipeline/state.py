@@ -46,6 +46,7 @@ class PlanState:
     valley_threshold: float | None = None
     clusters: list = field(default_factory=list)
     creases: list = field(default_factory=list)
+    wide_valleys: list = field(default_factory=list)
     view: occlusion.ViewBuffer | None = None
     working_tree: object = None
     support: tuple | None = None

@@ -16,14 +16,17 @@ from scipy.spatial import cKDTree
 
 from weldseam.config import TraceConfig
 from weldseam.geometry import polyline_length, unit
-from weldseam.pipeline.joints import JointKind, akin
+from weldseam.pipeline.joints import JointKind, akin, recentred
 from weldseam.pipeline.order import Chain
-from weldseam.pipeline.section import FineSurface, SectionFit, section_frames
+from weldseam.pipeline.section import RECENTRE_M, FineSurface, SectionFit, section_frames
 
 # A section's seam point far from the median of this many sections around it jumps off the seam's
 # line and is dropped (trace.max_jump_m).
 CONSISTENT_WINDOW = 5
 INSIDE_FRACTION = 0.8
+# A chain whose sections find the seam this far from it (median) is moved onto what they found
+# (on_fits), each point by the median offset of this many fits around it.
+ON_FITS_WINDOW = 5
 
 
 @dataclass(frozen=True)
@@ -39,7 +42,8 @@ class TracedSeam:
     """Seam points (K, 3) and torch axes (K, 3) in travel order, the joint, how sure the trace is
     (0..1), the holes in the scan the seam was interpolated across (weldseam.pipeline.extend),
     for a groove, the median half-width of its opening (m) as traced, the candidates (chain
-    indices) it was traced from, and each point's PointFlag bits (None: none)."""
+    indices) it was traced from, each point's PointFlag bits (None: none), and the median
+    across_spread of its fits (JointGeometry: over 1 at a corner of more than 90 degrees)."""
 
     positions_m: np.ndarray
     torch_axes: np.ndarray
@@ -50,6 +54,7 @@ class TracedSeam:
     half_opening_m: float = 0.0
     sources: frozenset[int] = frozenset()
     flags: np.ndarray | None = None
+    across_spread: float = 1.0
 
     @property
     def point_flags(self) -> np.ndarray:
@@ -60,7 +65,8 @@ class TracedSeam:
         """The seam's points at `index` (a slice or index array) as a seam of their own (open unless
         `closed`; the holes it crossed are not carried, the groove's opening is)."""
         return TracedSeam(self.positions_m[index], self.torch_axes[index], closed, self.joint, self.confidence,
-                          half_opening_m=self.half_opening_m, sources=self.sources, flags=self.point_flags[index])  # fmt: skip
+                          half_opening_m=self.half_opening_m, sources=self.sources, flags=self.point_flags[index],
+                          across_spread=self.across_spread)  # fmt: skip
 
     @property
     def length_m(self) -> float:
@@ -70,12 +76,14 @@ class TracedSeam:
 
 def trace_chain(
     chain: Chain, approx_axes: np.ndarray, probe_fits: dict[int, SectionFit], surface: FineSurface,
-    params: TraceConfig,
+    params: TraceConfig, follow_fits: bool = False,
 ) -> list[TracedSeam]:
     """Seams found along one chain (none if the chain is not a seam): a section at every chain
     point, seeking the joints its probes found (and their kin, joints.akin). The chain's probes are
     sections at some of its points in the same frames, fitted as these are: they are not fitted
-    again."""
+    again. `follow_fits`: a chain thinned from a band wider than its joint (a wide valley's) may
+    lie a few mm off it; where its sections find the seam off it (on_fits), they are taken again
+    across the line they found."""
     travel, axes, lateral = section_frames(chain.points, approx_axes, chain.closed)
     rest = np.array([k for k in range(len(chain.points)) if k not in probe_fits], dtype=int)
     sought = akin({fit.kind for fit in probe_fits.values() if fit.kind is not None}) or None  # none: any
@@ -85,6 +93,13 @@ def trace_chain(
     if not kinds:
         return []
     joint, count = max(sorted(kinds.items()), key=lambda item: item[1])
+    # A kind that assumes the joint centred has each section fitted again so already (fit_many).
+    moved = on_fits(chain, fits, joint) if follow_fits and not recentred(joint) else None
+    if moved is not None:
+        chain = moved
+        travel, axes, lateral = section_frames(chain.points, approx_axes, chain.closed)
+        fits = surface.fit_many(chain.points, travel, axes, lateral, akin({joint}))
+        count = sum(fit.kind == joint for fit in fits)
     confidence = count / len(fits)
     if confidence < params.min_valid_fraction:
         return []
@@ -94,8 +109,9 @@ def trace_chain(
                                               {joint})):
         fits[k] = fit
     positions, axes = np.array([fit.point_m for fit in fits]), np.array([fit.torch_axis for fit in fits])
-    valid = np.array([fit.kind == joint for fit in fits]) & consistent(positions, axes, params.max_offset_m,
-                                                                        params.max_turn_deg)
+    # A shallow corner's point is known less well across than a square one's (across_spread).
+    max_offset = params.max_offset_m * np.array([fit.geometry.across_spread for fit in fits])
+    valid = np.array([fit.kind == joint for fit in fits]) & consistent(positions, axes, max_offset, params.max_turn_deg)
     seams = []
     for run, closed in _valid_runs(chain.points, valid, chain.closed, params.max_gap_m):
         run_fits = [fits[i] for i in run]
@@ -107,10 +123,29 @@ def trace_chain(
                 joint=joint,
                 confidence=round(confidence, 3),
                 half_opening_m=float(np.median([fit.half_opening_m for fit in run_fits])),
+                across_spread=float(np.median([fit.geometry.across_spread for fit in run_fits])),
                 flags=np.array([fit.flags for fit in run_fits], np.uint8),
             )
         )
     return seams
+
+
+def on_fits(chain: Chain, fits: list[SectionFit], joint: JointKind) -> Chain | None:
+    """The chain moved onto the seam points its sections of `joint` found, where they lie farther
+    than RECENTRE_M from it (median), None otherwise or with fewer than three such fits: each
+    point moved by the median offset of the fits at it and its neighbours (ON_FITS_WINDOW), the
+    offsets interpolated along the chain between the fits (held beyond the first and last)."""
+    found = np.array([k for k, fit in enumerate(fits) if fit.kind == joint], dtype=int)
+    if len(found) < 3:
+        return None
+    offsets = np.array([fits[k].point_m for k in found]) - chain.points[found]
+    if np.median(np.linalg.norm(offsets, axis=1)) <= RECENTRE_M:
+        return None
+    half = ON_FITS_WINDOW // 2
+    smoothed = np.array([np.median(offsets[max(0, i - half): i + half + 1], axis=0) for i in range(len(found))])
+    index = np.arange(len(chain.points))
+    shift = np.column_stack([np.interp(index, found, smoothed[:, axis]) for axis in range(3)])
+    return Chain(points=chain.points + shift, closed=chain.closed)
 
 
 def inside_traced(points: np.ndarray, seams: list[TracedSeam], beside_m: float) -> bool:
@@ -126,11 +161,11 @@ def inside_traced(points: np.ndarray, seams: list[TracedSeam], beside_m: float) 
     return bool(np.mean(covered) >= INSIDE_FRACTION) if len(points) else True
 
 
-def consistent(positions: np.ndarray, axes: np.ndarray, max_offset_m: float, max_turn_deg: float) -> np.ndarray:
+def consistent(positions: np.ndarray, axes: np.ndarray, max_offset_m, max_turn_deg: float) -> np.ndarray:
     """(K,) False for seam points (K, 3) that jump off the line of their neighbours: farther than
-    `max_offset_m` from the line through the CONSISTENT_WINDOW nearest other points (their mean and
-    principal direction), or whose torch axis (K, 3) is more than `max_turn_deg` from those
-    points' median axis. A point is never its own reference: at the ends the neighbours all lie on
+    `max_offset_m` (one for all, or (K,) one per point) from the line through the CONSISTENT_WINDOW
+    nearest other points (their mean and principal direction), or whose torch axis (K, 3) is more
+    than `max_turn_deg` from those points' median axis. A point is never its own reference: at the ends the neighbours all lie on
     one side (a section at a seam's end is often distorted by the part's end face)."""
     count = len(positions)
     if count <= CONSISTENT_WINDOW:
