@@ -62,6 +62,15 @@ def ahead(last_point, direction, bend, distance_m: float) -> tuple[np.ndarray, n
     return last_point + distance_m * direction + 0.5 * distance_m**2 * bend, unit(direction + distance_m * bend)
 
 
+def offsets(point, predicted, travel, axis) -> tuple[float, float]:
+    """(depth, sideways): the offsets (m) of `point` from `predicted` along the torch `axis`
+    (made perpendicular to `travel`) and across it."""
+    axis = unit(axis - (axis @ travel) * travel)
+    offset = point - predicted
+    depth = abs(offset @ axis)
+    return depth, np.linalg.norm(offset - (offset @ axis) * axis)
+
+
 @dataclass(frozen=True)
 class SeamLine:
     """The straight line through a seam's last stretch: a point on it and its unit direction."""
@@ -72,18 +81,17 @@ class SeamLine:
     def holds(self, point: np.ndarray, axis: np.ndarray, step_m: float) -> bool:
         """Whether `point` (3,) lies within 1.5 steps of the line sideways (across the torch `axis`
         made perpendicular to the line) and half a step along the axis."""
-        offset = point - self.point
-        offset = offset - (offset @ self.direction) * self.direction
-        axis = unit(axis - (axis @ self.direction) * self.direction)
-        depth = offset @ axis
-        return bool(abs(depth) <= 0.5 * step_m and np.linalg.norm(offset - depth * axis) <= 1.5 * step_m)
+        foot = self.point + ((point - self.point) @ self.direction) * self.direction
+        depth, sideways = offsets(point, foot, self.direction, axis)
+        return bool(depth <= 0.5 * step_m and sideways <= 1.5 * step_m)
 
 
 def seam_line(points: np.ndarray) -> SeamLine | None:
     """The line fitted (centroid, principal direction) to the last TANGENT_BASELINE_M of arc of
     `points` (K, 3, travel order), pointing on; None with fewer than 5 points there."""
-    ordered = points[::-1]
-    window = ordered[arc_lengths(ordered) <= TANGENT_BASELINE_M] if len(ordered) else ordered
+    if len(points) < 5:
+        return None
+    window = _end_window(points)[0]
     if len(window) < 5:
         return None
     centre = window.mean(axis=0)

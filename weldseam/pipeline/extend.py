@@ -29,12 +29,12 @@ from scipy.spatial import cKDTree
 from weldseam.config import ExtendConfig
 from weldseam.geometry import arc_lengths, bend_corner, polyline_length, unit
 from weldseam.pipeline.bridge import GrooveTemplate, groove_template, part_ends_ahead
-from weldseam.pipeline.ends import END_BASELINE_M, TANGENT_BASELINE_M, SeamLine, ahead, end_curve, seam_line
+from weldseam.pipeline.ends import END_BASELINE_M, TANGENT_BASELINE_M, SeamLine, ahead, end_curve, offsets, seam_line
 from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.parallel import map_shared
 from weldseam.pipeline.section import FineSurface, PointFlag, SectionFit, section_frames
 from weldseam.pipeline.holes import across_hole, hole_aim, hole_of
-from weldseam.pipeline.seek import Extension, next_fit, offsets
+from weldseam.pipeline.seek import Extension, next_fit
 from weldseam.pipeline.tacks import across_tack
 from weldseam.pipeline.turn import turned_run
 from weldseam.pipeline.trace import Hole, TracedSeam

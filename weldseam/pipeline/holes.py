@@ -7,10 +7,10 @@ import numpy as np
 
 from weldseam.geometry import arc_lengths, polyline_length, unit
 from weldseam.pipeline.bridge import groove_bottom, sees_past_end
-from weldseam.pipeline.ends import ahead, end_curve
+from weldseam.pipeline.ends import ahead, end_curve, offsets
 from weldseam.pipeline.joints import JointGeometry, JointKind
 from weldseam.pipeline.section import PointFlag, SectionFit
-from weldseam.pipeline.seek import Extension, next_fit, offsets, plain_fit
+from weldseam.pipeline.seek import Extension, next_fit, plain_fit
 from weldseam.pipeline.trace import Hole
 
 # The seam must fit this many times in a row beyond a hole (or up to the part's end), and the seam

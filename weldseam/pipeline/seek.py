@@ -4,12 +4,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
-
 from weldseam.config import ExtendConfig
-from weldseam.geometry import unit
 from weldseam.pipeline.bridge import GrooveTemplate, fit_or_bridge
-from weldseam.pipeline.ends import SeamLine, ahead
+from weldseam.pipeline.ends import SeamLine, ahead, offsets
 from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.section import FineSurface, SectionFit
 
@@ -70,14 +67,6 @@ def section_at(extension: Extension, predicted, travel, axis, template: GrooveTe
     fit = fit_or_bridge(extension.surface, predicted, travel, axis, template, {extension.joint})
     return fit, *offsets(fit.point_m, predicted, travel, axis)
 
-
-def offsets(point, predicted, travel, axis) -> tuple[float, float]:
-    """(depth, sideways): the offsets (m) of `point` from `predicted` along the torch `axis`
-    (made perpendicular to `travel`) and across it."""
-    axis = unit(axis - (axis @ travel) * travel)
-    offset = point - predicted
-    depth = abs(offset @ axis)
-    return depth, np.linalg.norm(offset - (offset @ axis) * axis)
 
 
 def plain_fit(extension: Extension, centre, travel, axis) -> SectionFit:

@@ -17,9 +17,9 @@ from __future__ import annotations
 import numpy as np
 
 from weldseam.geometry import arc_lengths, unit
-from weldseam.pipeline.ends import ahead
+from weldseam.pipeline.ends import ahead, offsets
 from weldseam.pipeline.section import SectionFit
-from weldseam.pipeline.seek import Extension, next_fit, offsets, plain_fit
+from weldseam.pipeline.seek import Extension, next_fit, plain_fit
 from weldseam.types import Tack
 
 MIN_HEIGHT_M = 0.001

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from weldseam.geometry import unit
-from weldseam.pipeline.joints.robust import fraction, line, mean, noise, quantile
+from weldseam.pipeline.joints.robust import fraction, line, mean, noise, parabola, parabola_at, quantile
 
 # A break leaves at least this many points on each side.
 MIN_FACE_POINTS = 5
@@ -116,20 +116,20 @@ def fit_face(u: np.ndarray, w: np.ndarray, origin: tuple[float, float], side: fl
     if not smooth_side(u, w, origin):
         return None
     t = u - origin_u
-    residual = w - _evaluate(_parabola(t, w), t)
+    residual = w - parabola_at(parabola(t, w), t)
     inliers = np.abs(residual) <= max(3 * noise(residual), MIN_INLIER_BAND_M)
     count = np.count_nonzero(inliers)
     if fraction(inliers) < INLIER_FRACTION or count < MIN_FACE_POINTS:
         return None
     intercept, slope = line(t[inliers], w[inliers])
     line_error = float(np.sum((w[inliers] - intercept - slope * t[inliers]) ** 2))
-    curve_error = float(np.sum((w[inliers] - _evaluate(_parabola(t[inliers], w[inliers]), t[inliers])) ** 2))
+    curve_error = float(np.sum((w[inliers] - parabola_at(parabola(t[inliers], w[inliers]), t[inliers])) ** 2))
     if (line_error - curve_error) * (count - 3) <= CURVED_F * max(curve_error, 1e-18):
         return _straight_face(t, w, origin_u, side)
     near = inliers & (np.hypot(t, w - origin_w) <= CURVED_REACH_M)
     if np.count_nonzero(near) < MIN_FACE_POINTS:
         return None
-    coefficients = tuple(float(c) for c in _parabola(t[near], w[near]))
+    coefficients = tuple(float(c) for c in parabola(t[near], w[near]))
     return Face(coefficients, origin_u, side, u[near], True)
 
 
@@ -244,8 +244,8 @@ def _bends_away(u: np.ndarray, w: np.ndarray) -> bool:
     intercept, slope = line(u, w)
     line_error = float(np.sum((w - intercept - slope * u) ** 2))
     centred = u - mean(u)
-    curve = _parabola(centred, w)
-    curve_error = float(np.sum((w - _evaluate(curve, centred)) ** 2))
+    curve = parabola(centred, w)
+    curve_error = float(np.sum((w - parabola_at(curve, centred)) ** 2))
     significant = (line_error - curve_error) * (len(u) - 3) > CURVED_F * max(curve_error, 1e-18)
     return bool(significant and curve[2] < 0)
 
@@ -260,20 +260,6 @@ def meeting_point(left: Face, right: Face, start_u: float, iterations: int = 6) 
             return None
         u -= float(left.at(u) - right.at(u)) / rate
     return u
-
-
-def _parabola(s: np.ndarray, n: np.ndarray) -> np.ndarray:
-    """(c0, c1, c2) of the least-squares parabola n = c0 + c1 s + c2 s^2."""
-    scale = max(float(np.abs(s).max()), 1e-9)
-    x = s / scale
-    design = np.empty((len(x), 3))
-    design[:, 0], design[:, 1], design[:, 2] = 1.0, x, x * x
-    solution = np.linalg.lstsq(design, n, rcond=None)[0]
-    return solution / np.array([1.0, scale, scale * scale])
-
-
-def _evaluate(coefficients: np.ndarray, s: np.ndarray) -> np.ndarray:
-    return coefficients[0] + coefficients[1] * s + coefficients[2] * s * s
 
 
 def _parabola_error(sums: np.ndarray) -> np.ndarray:

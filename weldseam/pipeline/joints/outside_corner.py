@@ -22,7 +22,7 @@ import numpy as np
 from weldseam.geometry import unit
 from weldseam.pipeline.joints.base import JointGeometry, JointKind, NoFit, ProfileFit
 from weldseam.pipeline.joints.profile import SortedProfile
-from weldseam.pipeline.joints.robust import fraction, line, median, middle, noise, upper_decile
+from weldseam.pipeline.joints.robust import fraction, line, median, middle, noise, parabola, parabola_at, upper_decile
 
 KIND = JointKind.OUTSIDE_CORNER
 # Where the ridge lies does not depend on where the window sits.
@@ -226,10 +226,10 @@ def _curved(u: np.ndarray, w: np.ndarray) -> bool:
     half = np.ptp(u) / 2
     if len(u) < 4 or half <= 0:
         return False
-    across = (u - u.mean()) / half  # -1..1: a well-conditioned design
-    design = np.column_stack([np.ones_like(across), across, across * across])
-    coefficients = np.linalg.lstsq(design, w, rcond=None)[0]
-    return abs(coefficients[2]) > max(3 * noise(w - design @ coefficients), MAX_SAGITTA_M)
+    centred = u - u.mean()
+    coefficients = parabola(centred, w)
+    sagitta = abs(coefficients[2]) * half * half
+    return sagitta > max(3 * noise(w - parabola_at(coefficients, centred)), MAX_SAGITTA_M)
 
 
 def _face_end(u: np.ndarray, away: int) -> tuple[float, float, float]:

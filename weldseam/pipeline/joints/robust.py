@@ -17,6 +17,21 @@ def line(u: np.ndarray, w: np.ndarray) -> tuple[float, float]:
     return float(mean_w - slope * mean_u), slope
 
 
+def parabola(s: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """(c0, c1, c2) of the least-squares parabola n = c0 + c1 s + c2 s^2."""
+    scale = max(float(np.abs(s).max()), 1e-9)
+    x = s / scale
+    design = np.empty((len(x), 3))
+    design[:, 0], design[:, 1], design[:, 2] = 1.0, x, x * x
+    solution = np.linalg.lstsq(design, n, rcond=None)[0]
+    return solution / np.array([1.0, scale, scale * scale])
+
+
+def parabola_at(coefficients: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """The parabola (c0, c1, c2) at s: c0 + c1 s + c2 s^2."""
+    return coefficients[0] + coefficients[1] * s + coefficients[2] * s * s
+
+
 def mean(values: np.ndarray) -> float:
     """The mean, as ndarray.mean gives it, without its overhead."""
     return float(np.add.reduce(values)) / len(values)
