@@ -171,3 +171,30 @@ def test_an_output_whose_result_never_arrived_is_removed_so_the_summary_lists_ev
     jobs = [SimpleNamespace(output=str(path)) for path in (reported, unreported, older)]
     _drop_unreported(jobs, [SimpleNamespace(output=str(reported))], started)
     assert reported.exists() and not unreported.exists() and older.exists()
+
+
+def interrupt_swallowed_on_first(job):
+    """A Ctrl-C whose exception is lost where it is raised, as Python does in an at-fork hook."""
+    import os
+    import signal
+
+    from weldseam.batch import JobResult
+
+    if job.scan.endswith("0.ply"):
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+        except KeyboardInterrupt:
+            pass
+    return JobResult(job.scan, job.output, "ok", seams=1)
+
+
+def test_a_stop_signal_whose_exception_was_swallowed_still_stops_the_batch_in_this_process(tmp_path):
+    from weldseam.batch import run_local
+    from weldseam.batch_workers import Interrupted, StopSignals
+
+    scans = [touch(tmp_path / f"part{k}.ply") for k in range(3)]
+    finished = []
+    with StopSignals() as stop, pytest.raises(Interrupted) as interrupt:
+        for result in run_local(jobs_for(scans, tmp_path / "out"), 1, work=interrupt_swallowed_on_first, stop=stop):
+            finished.append(Path(result.scan).name)
+    assert interrupt.value.signum == 2 and finished == ["part0.ply"]

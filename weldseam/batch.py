@@ -239,7 +239,10 @@ def run_local(
     (batch_workers.py) and raises Interrupted.
     """
     if workers <= 1 or len(jobs) <= 1:
-        yield from map(work, jobs)
+        for job in jobs:
+            yield work(job)
+            if stop is not None:
+                stop.raise_if_caught()
         return
     for job, result in run_in_processes(work, jobs, min(workers, len(jobs)), stop):
         if isinstance(result, WorkerDied):

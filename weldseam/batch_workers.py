@@ -61,6 +61,12 @@ class StopSignals:
         if not self.deferred:
             raise Interrupted(signum)
 
+    def raise_if_caught(self) -> None:
+        """Interrupted if a stop signal came: its exception may have been swallowed where it
+        was raised (Python only prints one raised in an at-fork hook or a finaliser)."""
+        if self.signum is not None:
+            raise Interrupted(self.signum)
+
     def __exit__(self, *exc) -> None:
         for signum, handler in self._previous.items():
             signal.signal(signum, handler)
@@ -141,8 +147,8 @@ def run_in_processes(
             workers[-1].hand(pending.pop())
         while workers:
             ready = wait([worker.connection for worker in workers] + ([stop.wake_fd] if stop else []))
-            if stop is not None and stop.signum is not None:
-                raise Interrupted(stop.signum)
+            if stop is not None:
+                stop.raise_if_caught()
             for worker in [worker for worker in workers if worker.connection in ready]:
                 item, result = worker.item, worker.result()
                 if isinstance(result, WorkerDied):
