@@ -16,7 +16,7 @@ import numpy as np
 
 from weldseam.config import JointsConfig, PlanConfig
 from weldseam.geometry import unit
-from weldseam.pipeline.joints import JointGeometry, JointKind, ProfileFit, fit_profile, recentred
+from weldseam.pipeline.joints import JointGeometry, JointKind, ProfileFit, akin, fit_profile, recentred
 from weldseam.pipeline.occlusion import ViewBuffer
 from weldseam.pipeline.one_face import one_face_corner
 from weldseam.pipeline.parallel import map_shared
@@ -195,22 +195,25 @@ class FineSurface:
         A fit of a kind that assumes the joint in the middle of its window, made far from its
         centre or with a torch axis far from the frame's (a coarse line that runs along one
         groove wall), is fitted again in the frame it found: centred on its seam point, across
-        the same travel, with its torch axis. The joint then sits in the middle of the window
-        with its surface level, as the fit assumes."""
+        the same travel, with its torch axis, seeking its kind and kin alone (joints.akin: a fit
+        of another kind there would not replace it). The joint then sits in the middle of the
+        window with its surface level, as the fit assumes."""
         fits = self._fit_all(centres, travel, axes, lateral, kinds)
         moved = [
             k for k, fit in enumerate(fits)
             if fit.kind is not None and recentred(fit.kind)
             and (np.linalg.norm(fit.point_m - centres[k]) > RECENTRE_M or fit.torch_axis @ axes[k] < RECENTRE_COS)
         ]
-        if moved:
-            again_axes, again_lateral = zip(*(section_frame(travel[k], fits[k].torch_axis) for k in moved))
+        for kind in sorted({fits[k].kind for k in moved}, key=lambda kind: kind.value):
+            again_at = [k for k in moved if fits[k].kind == kind]
+            sought = akin({kind}) if kinds is None else akin({kind}) & frozenset(kinds)
+            again_axes, again_lateral = zip(*(section_frame(travel[k], fits[k].torch_axis) for k in again_at))
             again = self._fit_all(
-                np.array([fits[k].point_m for k in moved]), travel[moved], np.array(again_axes),
-                np.array(again_lateral), kinds,
+                np.array([fits[k].point_m for k in again_at]), travel[again_at], np.array(again_axes),
+                np.array(again_lateral), sought,
             )
-            for k, fit in zip(moved, again):
-                if fit.kind == fits[k].kind:
+            for k, fit in zip(again_at, again):
+                if fit.kind == kind:
                     fits[k] = fit
         return fits
 
