@@ -273,7 +273,7 @@ def _extend(state: PlanState, c: PlanConfig) -> None:
 def _split(state: PlanState, c: PlanConfig) -> None:
     final = split.split_seams(state.seams, state.holes, c.split, c.extend.step_m)
     reject_lost(state, state.seams, final, Rejection.FRAGMENT)
-    in_line = slots.in_line_seams(final, state.surface, c.section.half_width_m)
+    in_line = slots.in_line_seams(final, state.surface, c.section.half_width_m, state.support, c.support.tolerance_m)
     reject_lost(state, final, in_line, Rejection.SLOT)
     state.seams = in_line
     dump_seams(state, "split")
