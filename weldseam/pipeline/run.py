@@ -20,6 +20,7 @@ from weldseam.config import PlanConfig
 from weldseam.errors import InputError, NoSeamError
 from weldseam.geometry import polyline_length
 from weldseam.pipeline import (
+    apart,
     boundary,
     candidates,
     condition,
@@ -275,7 +276,9 @@ def _split(state: PlanState, c: PlanConfig) -> None:
     reject_lost(state, state.seams, final, Rejection.FRAGMENT)
     in_line = slots.in_line_seams(final, state.surface, c.section.half_width_m, state.support, c.support.tolerance_m)
     reject_lost(state, final, in_line, Rejection.SLOT)
-    state.seams = in_line
+    joined = apart.joined_seams(in_line, state.surface)
+    reject_lost(state, in_line, joined, Rejection.APART)
+    state.seams = joined
     dump_seams(state, "split")
 
 
