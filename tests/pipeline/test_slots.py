@@ -2,6 +2,8 @@
 x > width / 2), the left one turned `turn_deg` up from it, a slot between them whose far wall is
 seen down to 14 mm; extruded 60 mm along y. The seam runs along y at the slot, torch axis -z."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
@@ -173,3 +175,13 @@ def test_a_bar_beside_a_plate_gives_no_seam_and_both_grooves_are_kept():
         gaps = [np.linalg.norm(np.maximum(0.0, np.maximum(f.bounds[0] - centre, centre - f.bounds[1])))
                 for f in scene.fixtures]  # fmt: skip
         assert min(gaps) < 0.01  # beside a fixture (the bar)
+
+
+@pytest.mark.parametrize("joint", [JointKind.SQUARE_BUTT, JointKind.V_GROOVE])
+def test_a_square_butt_down_to_the_table_is_kept(rng, joint):
+    """An 8 mm plate either side of a 1.5 mm opening, its walls square down to the table: a
+    square butt's walls stand square, over no more than joints.gap_max_m."""
+    surface = extruded(rng, [(-0.03, 0.008), (-0.00075, 0.008), (-0.00075, 0.0), (0.00075, 0.0), (0.00075, 0.008),
+                             (0.03, 0.008)])  # fmt: skip
+    seam = replace(groove_seam(0.0, 0.008, 0.00075), joint=joint)
+    assert not gap_to_table(seam, surface, TABLE, 0.002)

@@ -10,13 +10,13 @@ across the whole section window (section.half_width_m): over 20 mm a slope is me
 few degrees in a noisy scan, over the 12 mm that set the torch axis only within ~10.
 
 A groove's walls also close in: a V's (or bevel's) walls include 30 degrees or more and meet at
-its root, a square butt's opening is a few mm at most, and the root is the plates' own material
-(or a root gap a few mm wide). A bar lying on the table beside a plate, its top level with the
-plate's, leaves a gap whose walls stand square (a plate's edge, the bar's side) all the way down
-to the table: seen from above its tops are in line and it fits as a narrow V. Such a gap is as
-deep as the parts standing on the table, deeper than the walls of any V across that opening
-could reach (depth > opening / (2 tan 15 deg)), and its bottom is the support plane: what two
-parts form with the table between them is no joint (`gap_to_table`).
+its root (or a root gap a few mm wide); only a square butt's walls stand square, over an opening
+of joints.gap_max_m (4 mm) at most. A bar lying on the table beside a plate, its top level with
+the plate's, leaves a gap whose walls stand square (a plate's edge, the bar's side) all the way
+down to the table: seen from above its tops are in line and it fits as a narrow V. Such a gap is
+wider than a square butt opens, deeper than the walls of any V across that opening could reach
+(depth > opening / (2 tan 15 deg)), and its bottom is the support plane: what two parts form
+with the table between them is no joint (`gap_to_table`).
 """
 
 from __future__ import annotations
@@ -72,13 +72,13 @@ def slot(seam: TracedSeam, surface: FineSurface, reach_m: float) -> bool:
 
 def gap_to_table(seam: TracedSeam, surface: FineSurface, support, tolerance_m: float) -> bool:
     """Whether a butt joint is a gap between two parts down to the table. Up to SIDE_SAMPLES
-    sections along it are fitted again as its kind; a section is deep where the groove is deeper
-    than walls including MIN_INCLUDED_DEG could reach across its opening (depth > opening /
-    (2 tan 15 deg)), and reaches the table where its bottom (the seam point `depth` along the
-    torch axis) also lies within `tolerance_m` of the support plane (point, unit normal; None:
-    no table, no gap to it). A gap: at least MIN_MEASURED sections measured, most of them deep,
-    and MIN_MEASURED or more reaching the table (a narrow gap hides its bottom from a camera
-    looking in at an angle)."""
+    sections along it are fitted again as its kind; a section is deep where its opening is wider
+    than a square butt's (joints.gap_max_m) and the groove deeper than walls including
+    MIN_INCLUDED_DEG could reach across it (depth > opening / (2 tan 15 deg)), and reaches the
+    table where its bottom (the seam point `depth` along the torch axis) also lies within
+    `tolerance_m` of the support plane (point, unit normal; None: no table, no gap to it). A gap:
+    at least MIN_MEASURED sections measured, most of them deep, and MIN_MEASURED or more reaching
+    the table (a narrow gap hides its bottom from a camera looking in at an angle)."""
     if seam.joint not in BUTT_JOINTS or support is None:
         return False
     centre, normal = support
@@ -89,8 +89,9 @@ def gap_to_table(seam: TracedSeam, surface: FineSurface, support, tolerance_m: f
     measured = [f for f in fits if f.kind is not None and f.geometry.depth_m is not None and f.geometry.opening_m]
     if len(measured) < MIN_MEASURED:
         return False
-    depth = np.array([f.geometry.depth_m for f in measured])
-    deep = depth > np.array([f.geometry.opening_m for f in measured]) / (2.0 * np.tan(np.radians(MIN_INCLUDED_DEG / 2)))
+    depth, opening = (np.array([getattr(f.geometry, name) for f in measured]) for name in ("depth_m", "opening_m"))
+    walls_reach = opening / (2 * np.tan(np.radians(MIN_INCLUDED_DEG / 2)))
+    deep = (opening > surface.params.joints.gap_max_m) & (depth > walls_reach)
     bottoms = np.array([f.point_m for f in measured]) + depth[:, None] * np.array([f.torch_axis for f in measured])
     on_table = np.abs((bottoms - centre) @ normal) <= tolerance_m
     return np.count_nonzero(deep) > len(measured) / 2 and np.count_nonzero(deep & on_table) >= MIN_MEASURED
