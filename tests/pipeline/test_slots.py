@@ -2,6 +2,8 @@
 x > width / 2), the left one turned `turn_deg` up from it, a slot between them whose far wall is
 seen down to 14 mm; extruded 60 mm along y. The seam runs along y at the slot, torch axis -z."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
@@ -9,7 +11,7 @@ from scipy.spatial import cKDTree
 from weldseam.config import PlanConfig
 from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.section import FineSurface, section_params
-from weldseam.pipeline.slots import in_line_seams, sides_turn_deg, slot
+from weldseam.pipeline.slots import gap_to_table, in_line_seams, sides_turn_deg, slot
 from weldseam.pipeline.trace import TracedSeam
 
 REACH_M = PlanConfig().section.half_width_m
@@ -92,3 +94,94 @@ def test_a_clamp_post_beside_a_block_gives_no_seam_and_the_groove_is_kept():
         gaps = [np.linalg.norm(np.maximum(0.0, np.maximum(f.bounds[0] - centre, centre - f.bounds[1])))
                 for f in scene.fixtures]  # fmt: skip
         assert min(gaps) < 0.01  # beside a fixture (the clamp's post)
+
+
+# ------------------------------------------------------------------ a gap down to the table
+
+TABLE = (np.zeros(3), np.array([0.0, 0.0, 1.0]))
+
+
+def extruded(rng, outline_xz, spacing=0.0005):
+    """Points along the polyline `outline_xz` ((K, 2) x, z in m) every `spacing`, extruded 60 mm
+    along y every mm, with 0.2 mm noise: a FineSurface."""
+    outline = np.asarray(outline_xz, float)
+    pieces = [np.linspace(a, b, max(2, int(np.linalg.norm(b - a) / spacing)), endpoint=False)
+              for a, b in zip(outline[:-1], outline[1:])]  # fmt: skip
+    profile = np.vstack(pieces)
+    y = np.arange(0.0, 0.06, 0.001)
+    points = np.column_stack([np.tile(profile[:, 0], len(y)), np.repeat(y, len(profile)),
+                              np.tile(profile[:, 1], len(y))])  # fmt: skip
+    points += rng.normal(0.0, 0.0002, points.shape)
+    return FineSurface(points, cKDTree(points), section_params(PlanConfig()))
+
+
+def groove_seam(x_m, z_m, half_opening_m):
+    line = np.column_stack([np.full(25, x_m), np.linspace(0.005, 0.055, 25), np.full(25, z_m)])
+    return TracedSeam(line, np.tile([0.0, 0.0, -1.0], (25, 1)), False, JointKind.V_GROOVE, 1.0,
+                      half_opening_m=half_opening_m)  # fmt: skip
+
+
+def test_a_bar_beside_a_plate_level_with_it_leaves_a_gap_to_the_table_and_is_dropped(rng):
+    """A 20 mm plate (x < 0) and a 21 mm bar (x > 6 mm) on the table, their sides standing 3
+    degrees off square: their tops are in line, the 6 mm gap between them reaches the table."""
+    lean = 0.020 * np.tan(np.radians(3.0))
+    surface = extruded(rng, [(-0.03, 0.020), (0.0, 0.020), (lean, 0.0), (0.006 - lean, 0.0), (0.006, 0.021),
+                             (0.03, 0.021)])  # fmt: skip
+    seam = groove_seam(0.003, 0.020, 0.003)
+    assert not slot(seam, surface, REACH_M)  # its sides are in line
+    assert gap_to_table(seam, surface, TABLE, 0.002)
+    assert in_line_seams([seam], surface, REACH_M, TABLE, 0.002) == []
+
+
+def test_the_same_gap_with_no_table_found_is_kept(rng):
+    lean = 0.020 * np.tan(np.radians(3.0))
+    surface = extruded(rng, [(-0.03, 0.020), (0.0, 0.020), (lean, 0.0), (0.006 - lean, 0.0), (0.006, 0.021),
+                             (0.03, 0.021)])  # fmt: skip
+    seam = groove_seam(0.003, 0.020, 0.003)
+    assert in_line_seams([seam], surface, REACH_M, None, 0.002) == [seam]
+
+
+@pytest.mark.parametrize("thickness_m", [0.008, 0.020])
+def test_a_v_groove_down_to_the_table_through_its_root_gap_is_kept(rng, thickness_m):
+    """A 70-degree V through the whole plate with a 1 mm root gap: the table is seen at its
+    bottom, but its walls close in (depth = (opening - gap) / (2 tan 35 deg)): a groove."""
+    half_top = 0.0005 + thickness_m * np.tan(np.radians(35.0))
+    surface = extruded(rng, [(-0.03, thickness_m), (-half_top, thickness_m), (-0.0005, 0.0), (0.0005, 0.0),
+                             (half_top, thickness_m), (0.03, thickness_m)])  # fmt: skip
+    seam = groove_seam(0.0, thickness_m, half_top)
+    assert not gap_to_table(seam, surface, TABLE, 0.002)
+    assert in_line_seams([seam], surface, REACH_M, TABLE, 0.002) == [seam]
+
+
+def test_a_bar_beside_a_plate_gives_no_seam_and_both_grooves_are_kept():
+    """The project's own broad-world two_grooves scene, seed 9: a square bar lying on the table
+    beside the plate, its top level with it, was a third, 100 mm V-groove. Now the two paths are
+    the two grooves, and the candidates rejected as slots lie at the bar."""
+    from weldseam.pipeline.candidates import Rejection
+    from weldseam.pipeline.run import run_steps
+    from weldseam.synthetic.catalog import draw_case
+    from weldseam.types import Scan
+
+    scene, scan = draw_case("two_grooves", 9, broad=True)
+    state = run_steps(Scan(points_m=scan.points_m, camera_origin_m=scan.camera_origin_m, source="two_grooves_9"),
+                      PlanConfig(), last="split")  # fmt: skip
+    assert len(state.seams) == 2
+    for truth in scene.seams:
+        along = cKDTree(truth.points_m)
+        assert min(np.median(along.query(seam.positions_m)[0]) for seam in state.seams) < 0.0005
+    slots = [np.array(c.centre_m) for c in state.chain_candidates if c.rejection == Rejection.SLOT]
+    assert slots
+    for centre in slots:
+        gaps = [np.linalg.norm(np.maximum(0.0, np.maximum(f.bounds[0] - centre, centre - f.bounds[1])))
+                for f in scene.fixtures]  # fmt: skip
+        assert min(gaps) < 0.01  # beside a fixture (the bar)
+
+
+@pytest.mark.parametrize("joint", [JointKind.SQUARE_BUTT, JointKind.V_GROOVE])
+def test_a_square_butt_down_to_the_table_is_kept(rng, joint):
+    """An 8 mm plate either side of a 1.5 mm opening, its walls square down to the table: a
+    square butt's walls stand square, over no more than joints.gap_max_m."""
+    surface = extruded(rng, [(-0.03, 0.008), (-0.00075, 0.008), (-0.00075, 0.0), (0.00075, 0.0), (0.00075, 0.008),
+                             (0.03, 0.008)])  # fmt: skip
+    seam = replace(groove_seam(0.0, 0.008, 0.00075), joint=joint)
+    assert not gap_to_table(seam, surface, TABLE, 0.002)

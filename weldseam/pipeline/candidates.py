@@ -21,7 +21,8 @@ class Rejection(str, Enum):
     TOO_FEW_FITS = "too few of its sections fit one joint (trace.min_valid_fraction)"
     ON_SUPPORT = "a corner on the support plane (where a part rests on the table)"
     FRAGMENT = "too short after joining and extending"
-    SLOT = "a slot between two parts' sides not in line (a part and a clamp or bar beside it)"
+    APART = "a corner between two parts standing apart (one face runs on behind the other: a clamp's post)"
+    SLOT = "a slot between two parts (sides not in line, or a gap down to the table: a clamp or bar beside a part)"
 
 
 @dataclass(frozen=True)

@@ -83,10 +83,10 @@ def _bridge(extension: Extension, last_point, last_axis, leaving, run: list[Sect
     on a cubic Hermite curve, then `run`; None when scan points lie on that curve."""
     fit = run[0]
     arrival = unit(run[-1].point_m - run[0].point_m) if len(run) > 1 else travel
-    line = _hermite(last_point, leaving, fit.point_m, arrival, HOLE_RADIUS_M)
+    line = hermite(last_point, leaving, fit.point_m, arrival, HOLE_RADIUS_M)
     if extension.surface.tree.query_ball_point(line, HOLE_RADIUS_M, return_length=True).sum() > HOLE_STRAYS:
         return None
-    bridge = _hermite(last_point, leaving, fit.point_m, arrival, extension.params.step_m)
+    bridge = hermite(last_point, leaving, fit.point_m, arrival, extension.params.step_m)
     weights = np.linspace(0.0, 1.0, len(bridge) + 2)[1:-1, None]
     tilts = unit((1 - weights) * last_axis + weights * fit.torch_axis)
     geometry = JointGeometry(opening_m=2 * fit.half_opening_m)
@@ -120,7 +120,7 @@ def hole_of(start: np.ndarray, fits: list[SectionFit]) -> Hole:
     return Hole(tuple(round(float(v), 6) for v in middle), polyline_length(line))
 
 
-def _hermite(start, start_direction, end, end_direction, spacing_m: float) -> np.ndarray:
+def hermite(start, start_direction, end, end_direction, spacing_m: float) -> np.ndarray:
     """Points (K, 3) about `spacing_m` apart strictly between `start` and `end` on the cubic
     Hermite curve leaving `start` along `start_direction` and arriving along `end_direction`
     (tangent lengths = the chord)."""

@@ -20,6 +20,8 @@ from weldseam.config import PlanConfig
 from weldseam.errors import InputError, NoSeamError
 from weldseam.geometry import polyline_length
 from weldseam.pipeline import (
+    across,
+    apart,
     boundary,
     candidates,
     condition,
@@ -110,11 +112,11 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
     bands merge). Clusters too short are recorded as rejected."""
     state.threshold = c.segment.threshold
     if state.threshold is None:
-        state.threshold = _crease_threshold(c, c.descriptor.variant)
+        state.threshold = segment.crease_threshold(c, c.descriptor.variant)
     state.clusters, short = _clusters(state, c, state.descriptor > state.threshold)
     if c.segment.valleys:
         state.valley_threshold = max(
-            _crease_threshold(c, "valley"), segment.noise_floor(state.valley, c.segment.noise_factor)
+            segment.crease_threshold(c, "valley"), segment.noise_floor(state.valley, c.segment.noise_factor)
         )
         graph = state.neighbourhoods(c.descriptor.radius_m)
         for side in (state.valley > state.valley_threshold, state.valley < -state.valley_threshold):
@@ -138,13 +140,6 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
     state.working_tree = cKDTree(state.working)
     chosen = [*state.clusters, *state.creases, *state.wide_valleys]
     state.dump("segment", state.working[np.concatenate(chosen)] if chosen else np.empty((0, 3)), None)
-
-
-def _crease_threshold(c: PlanConfig, variant: str) -> float:
-    return segment.automatic_threshold(
-        spacing_m=c.condition.working_voxel_m, normals_radius_m=c.normals.radius_m,
-        descriptor_radius_m=c.descriptor.radius_m, variant=variant, min_crease_deg=c.segment.min_crease_deg,
-    )
 
 
 def _clusters(state: PlanState, c: PlanConfig, selected: np.ndarray):
@@ -265,7 +260,8 @@ def _join(state: PlanState, c: PlanConfig) -> None:
 
 
 def _extend(state: PlanState, c: PlanConfig) -> None:
-    state.seams = extend.extend_seams(state.seams, state.surface, c.extend)
+    seams = extend.extend_seams(state.seams, state.surface, c.extend)  # then pieces either side of a hole
+    state.seams = across.join_across_holes(seams, state.surface, state.camera, c.extend, c.join.join_m)
     state.holes = [hole for seam in state.seams for hole in seam.holes]
     dump_seams(state, "extend")
 
@@ -273,9 +269,10 @@ def _extend(state: PlanState, c: PlanConfig) -> None:
 def _split(state: PlanState, c: PlanConfig) -> None:
     final = split.split_seams(state.seams, state.holes, c.split, c.extend.step_m)
     reject_lost(state, state.seams, final, Rejection.FRAGMENT)
-    in_line = slots.in_line_seams(final, state.surface, c.section.half_width_m)
+    in_line = slots.in_line_seams(final, state.surface, c.section.half_width_m, state.support, c.support.tolerance_m)
     reject_lost(state, final, in_line, Rejection.SLOT)
-    state.seams = in_line
+    state.seams = apart.joined_seams(in_line, state.surface)
+    reject_lost(state, in_line, state.seams, Rejection.APART)
     dump_seams(state, "split")
 
 

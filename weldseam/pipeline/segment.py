@@ -6,7 +6,7 @@ import numpy as np
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from weldseam.config import SegmentConfig
+from weldseam.config import PlanConfig, SegmentConfig
 from weldseam.pipeline.descriptor import gradient_descriptor, valley_depth
 from weldseam.pipeline.grid import voxel_centroids, voxel_indices
 from weldseam.pipeline.neighbours import neighbour_mean, radius_graph
@@ -43,6 +43,14 @@ def automatic_threshold(
         values = gradient_descriptor(normals, graph, variant=variant)
     on_fold = (np.abs(points[:, 0]) <= spacing_m / 2) & (np.abs(points[:, 1]) <= half_extent / 3)
     return float(np.median(values[on_fold]))
+
+
+def crease_threshold(config: PlanConfig, variant: str) -> float:
+    """automatic_threshold at a run's spacing (the working voxel), radii and min_crease_deg."""
+    return automatic_threshold(
+        spacing_m=config.condition.working_voxel_m, normals_radius_m=config.normals.radius_m,
+        descriptor_radius_m=config.descriptor.radius_m, variant=variant, min_crease_deg=config.segment.min_crease_deg,
+    )
 
 
 def noise_floor(values: np.ndarray, factor: float) -> float:
