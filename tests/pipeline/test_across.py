@@ -63,6 +63,27 @@ def test_pieces_over_a_groove_the_scan_sees_are_no_hole(rng):
     assert len(join_across_holes([piece(0.01, 0.068), piece(0.132, 0.19)], surface, CAMERA, PARAMS, JOIN_M)) == 2
 
 
+def seen_from_the_camera(surface, extra_points=None):
+    """The surface with the camera's view of it (and of `extra_points`, (K, 3)) as one frame."""
+    from weldseam.pipeline.occlusion import ViewBuffer
+
+    points = surface.points if extra_points is None else np.vstack([surface.points, extra_points])
+    return FineSurface(points, cKDTree(points), surface.params, ViewBuffer.build(points, CAMERA, 0.001))
+
+
+def test_a_seam_hidden_under_a_bar_is_not_bridged_but_a_hole_seen_so_is(rng):
+    """A bar 30 mm above the groove (y 80-120 mm) hides the groove under it: the lines of sight to
+    the curve between the pieces meet the bar in front of it, and a torch sent along the curve
+    would run into the bar. The same gap with nothing over it is a hole, bridged."""
+    pieces = [piece(0.01, 0.068), piece(0.132, 0.19)]
+    open_hole = seen_from_the_camera(groove_surface(rng))
+    assert len(join_across_holes(pieces, open_hole, CAMERA, PARAMS, JOIN_M)) == 1
+    bx, by = (a.ravel() for a in np.meshgrid(np.arange(-0.02, 0.02, 0.0005), np.arange(0.08, 0.12, 0.0005)))
+    bar = np.column_stack([bx, by, np.full(bx.size, 0.03)])
+    under_a_bar = seen_from_the_camera(groove_surface(rng), bar)
+    assert len(join_across_holes(pieces, under_a_bar, CAMERA, PARAMS, JOIN_M)) == 2
+
+
 def test_pieces_not_in_line_stay_apart(rng):
     pieces = [piece(0.01, 0.068), piece(0.132, 0.19, x_m=0.02)]
     assert len(join_across_holes(pieces, groove_surface(rng, hole_half_width_m=0.05), CAMERA, PARAMS, JOIN_M)) == 2

@@ -123,6 +123,30 @@ def test_an_extension_crosses_a_hole_in_the_scan_and_goes_on_to_the_plate_end(rn
     assert extended(seam, points[~hole], max_hole_m=0.0)[:, 0].max() < -0.04, "max_hole_m = 0: stops at the hole"
 
 
+def test_an_extension_does_not_cross_a_stretch_hidden_under_a_bar(rng):
+    """The hole of the test above, but the groove is missing because a bar 30 mm over the plate
+    hides it from the camera: a torch sent across would run into the bar, so the seam stops at
+    the bar; with the bar's points taken away (a dropout, nothing in front) it is crossed."""
+    from scipy.spatial import cKDTree
+
+    from weldseam.pipeline.occlusion import ViewBuffer
+    from weldseam.pipeline.section import FineSurface, section_params
+    from weldseam.config import PlanConfig
+
+    camera = np.array([-0.03, 0.0, 0.4])
+    points = plate_ending_on_a_table(rng)
+    x = points[:, 0]
+    under = points[~((x > -0.045) & (x < -0.015))]
+    bx, by = grid((-0.043, -0.017), (-0.03, 0.03))
+    bar = np.column_stack([bx, by, np.full(len(bx), 0.03)])
+    seam = straight_trace(-0.075, -0.055, [0.0, 0.0, -1.0])
+    params = replace(ExtendConfig(), step_m=STEP_M, max_hole_m=0.05)
+    for seen, crossed in ((under, True), (np.vstack([under, bar]), False)):
+        surface = FineSurface(seen, cKDTree(seen), section_params(PlanConfig()), ViewBuffer.build(seen, camera, 0.001))
+        reach = extend_seam(seam, surface, params).positions_m[:, 0].max()
+        assert (reach > -0.01) if crossed else (reach < -0.04)
+
+
 def plate_with_a_hole_up_to_its_end(rng):
     """A 12 mm plate (top z = 0, end x = 0) with a 6 mm deep groove along x on a table (z = -0.012),
     seen from above; a dropout covers the groove's last 45 mm but for a strip at 2.6-4 mm from the

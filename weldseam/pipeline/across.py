@@ -22,7 +22,7 @@ import numpy as np
 from weldseam.config import ExtendConfig
 from weldseam.geometry import unit
 from weldseam.pipeline.ends import TANGENT_BASELINE_M, seam_line
-from weldseam.pipeline.holes import HOLE_EDGE_M, HOLE_RADIUS_M, HOLE_STRAYS, hermite, hole_of
+from weldseam.pipeline.holes import HOLE_EDGE_M, HOLE_RADIUS_M, HOLE_STRAYS, hermite, hidden, hole_of
 from weldseam.pipeline.joints import one_joint
 from weldseam.pipeline.section import FineSurface, PointFlag, SectionFit
 from weldseam.pipeline.trace import TracedSeam
@@ -85,8 +85,9 @@ def _reversed(seam: TracedSeam) -> TracedSeam:
 def _bridge(a: TracedSeam, b: TracedSeam, surface, camera_m, step_m: float) -> list[SectionFit] | None:
     """The interpolated points from a's end to b's start on the cubic Hermite curve along their
     lines (ends.seam_line), or None unless each piece's line passes the other's facing end within
-    SIDEWAYS_SHARE of the gap and the camera saw no surface through the curve (seen_through)
-    farther than HOLE_EDGE_M from its ends (at a hole's edge it sees the groove beside it)."""
+    SIDEWAYS_SHARE of the gap, the camera saw no surface through the curve (seen_through)
+    farther than HOLE_EDGE_M from its ends (at a hole's edge it sees the groove beside it), and
+    nothing in front of it hides the curve (holes.hidden)."""
     leaving = seam_line(a.positions_m)
     arriving = seam_line(b.positions_m[::-1])
     if leaving is None or arriving is None:
@@ -103,7 +104,7 @@ def _bridge(a: TracedSeam, b: TracedSeam, surface, camera_m, step_m: float) -> l
     curve = hermite(start, leaving.direction, end, -arriving.direction, min(step_m, HOLE_RADIUS_M))
     from_ends = np.minimum(np.linalg.norm(curve - start, axis=1), np.linalg.norm(curve - end, axis=1))
     inside = from_ends >= HOLE_EDGE_M
-    if seen_through(curve[inside], surface, camera_m) > HOLE_STRAYS:
+    if seen_through(curve[inside], surface, camera_m) > HOLE_STRAYS or hidden(curve, surface):
         return None
     points = hermite(start, leaving.direction, end, -arriving.direction, step_m)
     weights = np.linspace(0.0, 1.0, len(points) + 2)[1:-1, None]

@@ -9,7 +9,7 @@ from weldseam.geometry import arc_lengths, polyline_length, unit
 from weldseam.pipeline.bridge import groove_bottom, sees_past_end
 from weldseam.pipeline.ends import ahead, end_curve, offsets
 from weldseam.pipeline.joints import JointGeometry, JointKind
-from weldseam.pipeline.section import PointFlag, SectionFit
+from weldseam.pipeline.section import FineSurface, PointFlag, SectionFit
 from weldseam.pipeline.seek import Extension, next_fit, plain_fit
 from weldseam.pipeline.trace import Hole
 
@@ -18,6 +18,10 @@ from weldseam.pipeline.trace import Hole
 HOLE_CONFIRM = 2
 HOLE_RADIUS_M = 0.0015
 HOLE_STRAYS = 2
+# A stretch whose lines of sight meet a surface this much nearer to the camera (more than
+# HOLE_STRAYS of its points) is hidden behind something, a clamp or a bar over the seam, not lost
+# in a hole: a torch sent along it would run into what hides it.
+OCCLUDER_MARGIN_M = 0.005
 # A hole's edge cuts the sections beside it short (one groove wall seen, the other not), so the
 # fits within this much arc of it may lean sideways: a hole is aimed across from the fits before.
 HOLE_EDGE_M = 0.006
@@ -80,11 +84,14 @@ def across_hole(extension: Extension, last_point, last_axis, aims) -> list[Secti
 
 def _bridge(extension: Extension, last_point, last_axis, leaving, run: list[SectionFit], travel):
     """The bridged points from `last_point` (leaving along `leaving`) to the first fit of `run`
-    on a cubic Hermite curve, then `run`; None when scan points lie on that curve."""
+    on a cubic Hermite curve, then `run`; None when scan points lie on that curve or something
+    in front of it hides it (hidden)."""
     fit = run[0]
     arrival = unit(run[-1].point_m - run[0].point_m) if len(run) > 1 else travel
     line = hermite(last_point, leaving, fit.point_m, arrival, HOLE_RADIUS_M)
     if extension.surface.tree.query_ball_point(line, HOLE_RADIUS_M, return_length=True).sum() > HOLE_STRAYS:
+        return None
+    if hidden(line, extension.surface):
         return None
     bridge = hermite(last_point, leaving, fit.point_m, arrival, extension.params.step_m)
     weights = np.linspace(0.0, 1.0, len(bridge) + 2)[1:-1, None]
@@ -111,6 +118,15 @@ def _part_ends_after(extension: Extension, fit, travel, last_point, last_axis, d
     if None in bottoms:
         return False
     return sees_past_end(surface, fit, travel, extension.params.part_end_reach_m, max(bottoms))
+
+
+def hidden(curve: np.ndarray, surface: FineSurface) -> bool:
+    """Whether the camera's lines of sight to more than HOLE_STRAYS of the `curve`'s points (K, 3)
+    meet a surface OCCLUDER_MARGIN_M or more nearer (surface.view); False where no single camera
+    is known (merged frames)."""
+    if surface.view is None or len(curve) == 0:
+        return False
+    return int(np.count_nonzero(surface.view.nearer_than(curve, OCCLUDER_MARGIN_M) >= 0)) > HOLE_STRAYS
 
 
 def hole_of(start: np.ndarray, fits: list[SectionFit]) -> Hole:
