@@ -59,3 +59,28 @@ def rotation_about(axis, angle_rad):
 @pytest.fixture
 def rng():
     return np.random.default_rng(1234)
+
+
+def planned_broad_case(family: str, seed: int, last: str):
+    """(scene, state) of the project's own broad-world case `family`, `seed`, run through the
+    pipeline up to the step `last` with the default settings."""
+    from weldseam.config import PlanConfig
+    from weldseam.pipeline.run import run_steps
+    from weldseam.synthetic.catalog import draw_case
+    from weldseam.types import Scan
+
+    scene, scan = draw_case(family, seed, broad=True)
+    source = f"{family}_{seed}"
+    return scene, run_steps(Scan(points_m=scan.points_m, camera_origin_m=scan.camera_origin_m, source=source),
+                            PlanConfig(), last=last)  # fmt: skip
+
+
+def rejected_centres(state, rejection) -> list[np.ndarray]:
+    """The centres (3,) of the candidates a run rejected for `rejection`."""
+    return [np.array(c.centre_m) for c in state.chain_candidates if c.rejection == rejection]
+
+
+def gap_to_fixtures_m(scene, point: np.ndarray) -> float:
+    """The distance (m) from `point` to the nearest of the scene's fixtures' bounding boxes."""
+    return min(float(np.linalg.norm(np.maximum(0.0, np.maximum(f.bounds[0] - point, point - f.bounds[1]))))
+               for f in scene.fixtures)  # fmt: skip

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
+from tests.conftest import planned_broad_case
 from weldseam.config import PlanConfig
 from weldseam.pipeline.across import join_across_holes
 from weldseam.pipeline.joints import JointKind
@@ -99,13 +100,7 @@ def test_a_v_butt_with_a_60_mm_dropout_over_its_groove_is_one_seam():
     """The project's own broad-world V-butt, seed 6: a sensor dropout covers 60 mm of the groove
     and both plates beside it; each end stopped at its edge (52 mm apart, more than an end carries
     the seam across). Now one seam covers the whole groove, within 2 mm of it everywhere."""
-    from weldseam.pipeline.run import run_steps
-    from weldseam.synthetic.catalog import draw_case
-    from weldseam.types import Scan
-
-    scene, scan = draw_case("v_butt", 6, broad=True)
-    state = run_steps(Scan(points_m=scan.points_m, camera_origin_m=scan.camera_origin_m, source="v_butt_6"),
-                      PlanConfig(), last="resample")  # fmt: skip
+    scene, state = planned_broad_case("v_butt", 6, "resample")
     truth = scene.seams[0].points_m
     assert len(state.seams) == 1 and len(state.paths) == 1
     path = state.paths[0].positions_m

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
+from tests.conftest import gap_to_fixtures_m, planned_broad_case, rejected_centres
 from weldseam.config import PlanConfig
 from weldseam.pipeline.apart import joined_seams, standing_apart
 from weldseam.pipeline.joints import JointKind
@@ -66,18 +67,10 @@ def test_a_clamp_post_standing_beside_a_block_gives_no_fillet():
     made was a 97 mm vertical fillet up the post. Now the one seam is the groove, and the candidates
     rejected as standing apart lie at the post."""
     from weldseam.pipeline.candidates import Rejection
-    from weldseam.pipeline.run import run_steps
-    from weldseam.synthetic.catalog import draw_case
-    from weldseam.types import Scan
 
-    scene, scan = draw_case("block_groove", 9, broad=True)
-    state = run_steps(Scan(points_m=scan.points_m, camera_origin_m=scan.camera_origin_m, source="block_groove_9"),
-                      PlanConfig(), last="split")  # fmt: skip
+    scene, state = planned_broad_case("block_groove", 9, "split")
     truth = cKDTree(np.vstack([seam.points_m for seam in scene.seams]))
     assert len(state.seams) == 1 and np.median(truth.query(state.seams[0].positions_m)[0]) < 0.001
-    apart = [np.array(c.centre_m) for c in state.chain_candidates if c.rejection == Rejection.APART]
+    apart = rejected_centres(state, Rejection.APART)
     assert apart
-    for centre in apart:
-        gaps = [np.linalg.norm(np.maximum(0.0, np.maximum(f.bounds[0] - centre, centre - f.bounds[1])))
-                for f in scene.fixtures]  # fmt: skip
-        assert min(gaps) < 0.01  # beside a fixture (the clamp's post)
+    assert all(gap_to_fixtures_m(scene, centre) < 0.01 for centre in apart)  # beside a fixture (the clamp's post)

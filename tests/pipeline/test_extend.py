@@ -129,9 +129,9 @@ def test_an_extension_does_not_cross_a_stretch_hidden_under_a_bar(rng):
     the bar; with the bar's points taken away (a dropout, nothing in front) it is crossed."""
     from scipy.spatial import cKDTree
 
+    from weldseam.config import PlanConfig
     from weldseam.pipeline.occlusion import ViewBuffer
     from weldseam.pipeline.section import FineSurface, section_params
-    from weldseam.config import PlanConfig
 
     camera = np.array([-0.03, 0.0, 0.4])
     points = plate_ending_on_a_table(rng)

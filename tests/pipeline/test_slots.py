@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
+from tests.conftest import gap_to_fixtures_m, planned_broad_case, rejected_centres
 from weldseam.config import PlanConfig
 from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.section import FineSurface, section_params
@@ -79,21 +80,13 @@ def test_a_clamp_post_beside_a_block_gives_no_seam_and_the_groove_is_kept():
     top whose post stands a few mm beside the block: the slot between them was a second, 25 mm
     V-groove. Now the one path is the groove, and the candidate rejected as a slot lies at the post."""
     from weldseam.pipeline.candidates import Rejection
-    from weldseam.pipeline.run import run_steps
-    from weldseam.synthetic.catalog import draw_case
-    from weldseam.types import Scan
 
-    scene, scan = draw_case("block_groove", 1, broad=True)
-    state = run_steps(Scan(points_m=scan.points_m, camera_origin_m=scan.camera_origin_m, source="block_groove_1"),
-                      PlanConfig(), last="split")  # fmt: skip
+    scene, state = planned_broad_case("block_groove", 1, "split")
     truth = cKDTree(np.vstack([seam.points_m for seam in scene.seams]))
     assert len(state.seams) == 1 and np.median(truth.query(state.seams[0].positions_m)[0]) < 0.0005
-    slots = [np.array(c.centre_m) for c in state.chain_candidates if c.rejection == Rejection.SLOT]
+    slots = rejected_centres(state, Rejection.SLOT)
     assert slots
-    for centre in slots:
-        gaps = [np.linalg.norm(np.maximum(0.0, np.maximum(f.bounds[0] - centre, centre - f.bounds[1])))
-                for f in scene.fixtures]  # fmt: skip
-        assert min(gaps) < 0.01  # beside a fixture (the clamp's post)
+    assert all(gap_to_fixtures_m(scene, centre) < 0.01 for centre in slots)  # beside a fixture (the clamp's post)
 
 
 # ------------------------------------------------------------------ a gap down to the table
@@ -158,23 +151,15 @@ def test_a_bar_beside_a_plate_gives_no_seam_and_both_grooves_are_kept():
     beside the plate, its top level with it, was a third, 100 mm V-groove. Now the two paths are
     the two grooves, and the candidates rejected as slots lie at the bar."""
     from weldseam.pipeline.candidates import Rejection
-    from weldseam.pipeline.run import run_steps
-    from weldseam.synthetic.catalog import draw_case
-    from weldseam.types import Scan
 
-    scene, scan = draw_case("two_grooves", 9, broad=True)
-    state = run_steps(Scan(points_m=scan.points_m, camera_origin_m=scan.camera_origin_m, source="two_grooves_9"),
-                      PlanConfig(), last="split")  # fmt: skip
+    scene, state = planned_broad_case("two_grooves", 9, "split")
     assert len(state.seams) == 2
     for truth in scene.seams:
         along = cKDTree(truth.points_m)
         assert min(np.median(along.query(seam.positions_m)[0]) for seam in state.seams) < 0.0005
-    slots = [np.array(c.centre_m) for c in state.chain_candidates if c.rejection == Rejection.SLOT]
+    slots = rejected_centres(state, Rejection.SLOT)
     assert slots
-    for centre in slots:
-        gaps = [np.linalg.norm(np.maximum(0.0, np.maximum(f.bounds[0] - centre, centre - f.bounds[1])))
-                for f in scene.fixtures]  # fmt: skip
-        assert min(gaps) < 0.01  # beside a fixture (the bar)
+    assert all(gap_to_fixtures_m(scene, centre) < 0.01 for centre in slots)  # beside a fixture (the bar)
 
 
 @pytest.mark.parametrize("joint", [JointKind.SQUARE_BUTT, JointKind.V_GROOVE])
