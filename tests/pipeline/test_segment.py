@@ -1,4 +1,5 @@
 import numpy as np
+from scipy.spatial import cKDTree
 
 from tests.test_pipeline_helpers import crease_points
 from weldseam.config import SegmentConfig
@@ -104,10 +105,14 @@ def test_a_wide_valley_is_covered_by_one_fine_crease_along_it_not_by_pieces_besi
     points = np.vstack([line, line + [0.0, 0.004, 0.0], line + [0.0, 0.02, 0.0]])
     wide = np.arange(len(along))
     crease_on_it, crease_aside = wide + len(along), wide + 2 * len(along)
-    assert covered(points, wide, [crease_aside, crease_on_it], tolerance_m=0.006)
-    assert not covered(points, wide, [crease_aside], tolerance_m=0.006)
+
+    def trees(*creases):
+        return [cKDTree(points[crease]) for crease in creases]
+
+    assert covered(points[wide], trees(crease_aside, crease_on_it), tolerance_m=0.006)
+    assert not covered(points[wide], trees(crease_aside), tolerance_m=0.006)
     pieces = [crease_on_it[k : k + 10] for k in range(0, len(along), 10)]  # four pieces, each a quarter
-    assert not covered(points, wide, pieces, tolerance_m=0.006)
+    assert not covered(points[wide], trees(*pieces), tolerance_m=0.006)
 
 
 def test_a_wide_valleys_band_is_merged_into_voxels_a_quarter_of_its_radius(rng):

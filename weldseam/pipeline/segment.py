@@ -132,8 +132,9 @@ def wide_valley_clusters(
                         noise_factor=params.noise_factor, min_density=params.min_density)  # fmt: skip
     found, too_short = cluster_candidates(points, wide, tolerance_m=params.cluster_tolerance_m,
                                           min_length_m=params.min_seam_length_m)  # fmt: skip
+    crease_trees = [cKDTree(points[crease]) for crease in fine_creases]
     return [members for members in found
-            if not covered(points, members, fine_creases, params.cluster_tolerance_m)], too_short
+            if not covered(points[members], crease_trees, params.cluster_tolerance_m)], too_short
 
 
 def band_points(points: np.ndarray, params: SegmentConfig) -> np.ndarray:
@@ -143,12 +144,11 @@ def band_points(points: np.ndarray, params: SegmentConfig) -> np.ndarray:
     return voxel_centroids(points, params.wide_valley_radius_m / 4)
 
 
-def covered(points: np.ndarray, members: np.ndarray, candidates: list[np.ndarray], tolerance_m: float,
-            share: float = 0.5) -> bool:
-    """Whether one of `candidates` (index arrays into `points` (N, 3)) lies within `tolerance_m`
-    of at least `share` of the points `members`."""
-    for other in candidates:
-        distance = cKDTree(points[other]).query(points[members], distance_upper_bound=tolerance_m)[0]
+def covered(points: np.ndarray, candidates: list[cKDTree], tolerance_m: float, share: float = 0.5) -> bool:
+    """Whether one of `candidates` (search trees over each candidate's points) lies within
+    `tolerance_m` of at least `share` of `points` (M, 3)."""
+    for tree in candidates:
+        distance = tree.query(points, distance_upper_bound=tolerance_m)[0]
         if np.mean(distance <= tolerance_m) >= share:
             return True
     return False
