@@ -99,3 +99,9 @@ def test_a_shallow_corners_points_may_scatter_farther_across_than_a_square_ones(
     assert consistent(positions, axes, 0.0015 * shallow, 8.0)[7]
     assert abs(shallow - 1 / np.tan(np.radians(20.0))) < 1e-9 and square == 1.0
     assert JointGeometry(opening_m=0.012, included_deg=120.0).across_spread == 1.0, "a groove's point is between edges"
+
+
+def test_a_seam_is_sampled_evenly_from_its_first_point_to_its_last():
+    seam = TracedSeam(np.zeros((29, 3)), np.tile([0.0, 0.0, -1.0], (29, 1)), False, JointKind.V_GROOVE, 1.0)
+    assert seam.samples(15).tolist() == list(range(0, 29, 2))
+    assert seam.samples(40).tolist() == list(range(29))  # never more than it has

@@ -43,8 +43,7 @@ def standing_apart(seam: TracedSeam, surface: FineSurface) -> bool:
         return False
     params = surface.params
     travel, axes, lateral = section_frames(seam.positions_m, seam.torch_axes, seam.closed)
-    count = len(seam.positions_m)
-    picks = np.unique(np.linspace(0, count - 1, min(SAMPLES, count)).round().astype(int))
+    picks = seam.samples(SAMPLES)
     behind = []
     for k in picks:
         profile = surface.profile(seam.positions_m[k], travel[k], axes[k], lateral[k])

@@ -58,8 +58,7 @@ def slot(seam: TracedSeam, surface: FineSurface, reach_m: float) -> bool:
     if seam.joint not in BUTT_JOINTS:
         return False
     travel, axes, lateral = section_frames(seam.positions_m, seam.torch_axes, seam.closed)
-    count = len(seam.positions_m)
-    picks = np.unique(np.linspace(0, count - 1, min(SIDE_SAMPLES, count)).round().astype(int))
+    picks = seam.samples(SIDE_SAMPLES)
     half = seam.half_opening_m
     turns = []
     for k in picks:
@@ -83,8 +82,7 @@ def gap_to_table(seam: TracedSeam, surface: FineSurface, support, tolerance_m: f
         return False
     centre, normal = support
     travel, axes, lateral = section_frames(seam.positions_m, seam.torch_axes, seam.closed)
-    count = len(seam.positions_m)
-    picks = np.unique(np.linspace(0, count - 1, min(SIDE_SAMPLES, count)).round().astype(int))
+    picks = seam.samples(SIDE_SAMPLES)
     fits = surface.fit_many(seam.positions_m[picks], travel[picks], axes[picks], lateral[picks], {seam.joint})
     measured = [f for f in fits if f.kind is not None and f.geometry.depth_m is not None and f.geometry.opening_m]
     if len(measured) < MIN_MEASURED:

@@ -77,7 +77,7 @@ def formed_with(seam: TracedSeam, surface, plane, tolerance_m: float) -> bool:
     centre, normal = plane
     positions, axes = seam.positions_m, seam.torch_axes
     travel = np.gradient(positions, axis=0) if len(positions) > 1 else np.zeros_like(positions)
-    picks = np.unique(np.linspace(0, len(positions) - 1, min(SIDE_SAMPLES, len(positions))).round().astype(int))
+    picks = seam.samples(SIDE_SAMPLES)
     touching = 0
     for k, members in zip(picks, surface.tree.query_ball_point(positions[picks], SIDE_FAR_M)):
         t = travel[k] / (np.linalg.norm(travel[k]) or 1.0)

@@ -68,6 +68,11 @@ class TracedSeam:
                           half_opening_m=self.half_opening_m, sources=self.sources, flags=self.point_flags[index],
                           across_spread=self.across_spread)  # fmt: skip
 
+    def samples(self, count: int) -> np.ndarray:
+        """Indices of up to `count` of its points, evenly spaced from the first to the last."""
+        points = len(self.positions_m)
+        return np.unique(np.linspace(0, points - 1, min(count, points)).round().astype(int))
+
     @property
     def length_m(self) -> float:
         """Arc length (m), including the closing segment of a loop."""
