@@ -105,3 +105,22 @@ def test_a_seam_is_sampled_evenly_from_its_first_point_to_its_last():
     seam = TracedSeam(np.zeros((29, 3)), np.tile([0.0, 0.0, -1.0], (29, 1)), False, JointKind.V_GROOVE, 1.0)
     assert seam.samples(15).tolist() == list(range(0, 29, 2))
     assert seam.samples(40).tolist() == list(range(29))  # never more than it has
+
+
+def test_two_pieces_end_to_end_take_the_longer_ones_joint_and_weigh_the_rest_by_points():
+    from weldseam.pipeline.trace import Hole, end_to_end
+
+    def piece(x_from, count, joint, confidence, hole=()):
+        x = x_from + 0.002 * np.arange(count)
+        return TracedSeam(np.column_stack([x, np.zeros(count), np.zeros(count)]), np.tile([0.0, 0.0, -1.0], (count, 1)),
+                          False, joint, confidence, holes=hole, half_opening_m=0.004, sources=frozenset({count}))  # fmt: skip
+
+    earlier = Hole((0.01, 0.0, 0.0), 0.004)
+    a, b = piece(0.0, 30, JointKind.V_GROOVE, 1.0, (earlier,)), piece(0.07, 10, JointKind.BEVEL, 0.6)
+    between = (np.array([[0.064, 0.0, 0.0]]), np.array([[0.0, 0.0, -1.0]]), np.array([4]))
+    joined = end_to_end(a, between, b)
+    assert joined.joint == JointKind.V_GROOVE and joined.confidence == 0.9  # 0.75 x 1.0 + 0.25 x 0.6
+    assert len(joined.positions_m) == 41 and np.all(np.diff(joined.positions_m[:, 0]) > 0)
+    assert joined.point_flags.tolist() == [0] * 30 + [4] + [0] * 10
+    assert joined.holes == (earlier,) and joined.sources == frozenset({30, 10})
+    assert np.array_equal(joined.reversed().positions_m, joined.positions_m[::-1])

@@ -15,8 +15,6 @@ groove it sees the groove's bottom: those are no hole. The stretch between is in
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
 from weldseam.config import ExtendConfig
@@ -25,7 +23,7 @@ from weldseam.pipeline.ends import TANGENT_BASELINE_M, seam_line
 from weldseam.pipeline.holes import HOLE_EDGE_M, HOLE_RADIUS_M, HOLE_STRAYS, hermite, hidden, hole_of
 from weldseam.pipeline.joints import one_joint
 from weldseam.pipeline.section import FineSurface, PointFlag, SectionFit
-from weldseam.pipeline.trace import TracedSeam
+from weldseam.pipeline.trace import TracedSeam, end_to_end
 
 # Each end carries the seam max_hole_m toward the other.
 ENDS = 2
@@ -66,20 +64,17 @@ def _across(first: TracedSeam, second: TracedSeam, surface, camera_m, params: Ex
         return best
     if min(first.length_m, second.length_m) < TANGENT_BASELINE_M:
         return best
-    for a in (first, _reversed(first)):
-        for b in (second, _reversed(second)):
+    for a in (first, first.reversed()):
+        for b in (second, second.reversed()):
             gap = float(np.linalg.norm(b.positions_m[0] - a.positions_m[-1]))
             if not join_m < gap <= ENDS * params.max_hole_m or gap >= best[0]:
                 continue
             bridge = _bridge(a, b, surface, camera_m, params.step_m)
             if bridge is not None:
-                best = (gap, _merged(a, bridge, b, first, second))
+                hole = hole_of(a.positions_m[-1], [*bridge, SectionFit(b.joint, b.positions_m[0], b.torch_axes[0])])
+                between = ([f.point_m for f in bridge], [f.torch_axis for f in bridge], [f.flags for f in bridge])
+                best = (gap, end_to_end(a, between, b, (hole,)))
     return best
-
-
-def _reversed(seam: TracedSeam) -> TracedSeam:
-    return replace(seam, positions_m=seam.positions_m[::-1], torch_axes=seam.torch_axes[::-1],
-                   flags=seam.point_flags[::-1])  # fmt: skip
 
 
 def _bridge(a: TracedSeam, b: TracedSeam, surface, camera_m, step_m: float) -> list[SectionFit] | None:
@@ -121,22 +116,3 @@ def seen_through(curve: np.ndarray, surface: FineSurface, camera_m: np.ndarray) 
     steps = np.arange(-SIGHT_BEFORE_M, SIGHT_REACH_M, HOLE_RADIUS_M)
     samples = (curve[:, None, :] + steps[None, :, None] * sight[:, None, :]).reshape(-1, 3)
     return int(surface.tree.query_ball_point(samples, HOLE_RADIUS_M, return_length=True).sum())
-
-
-def _merged(a: TracedSeam, bridge: list[SectionFit], b: TracedSeam, first: TracedSeam, second: TracedSeam):
-    """a, the bridge and b as one seam: the joint of the piece with more points, the rest weighted
-    by points, the hole across recorded."""
-    weight = len(a.positions_m) / (len(a.positions_m) + len(b.positions_m))
-    hole = hole_of(a.positions_m[-1], [*bridge, SectionFit(b.joint, b.positions_m[0], b.torch_axes[0])])
-    return TracedSeam(
-        positions_m=np.vstack([a.positions_m, [f.point_m for f in bridge], b.positions_m]),
-        torch_axes=np.vstack([a.torch_axes, [f.torch_axis for f in bridge], b.torch_axes]),
-        closed=False,
-        joint=a.joint if len(a.positions_m) >= len(b.positions_m) else b.joint,
-        confidence=round(weight * a.confidence + (1 - weight) * b.confidence, 3),
-        holes=(*first.holes, *second.holes, hole),
-        half_opening_m=weight * a.half_opening_m + (1 - weight) * b.half_opening_m,
-        sources=first.sources | second.sources,
-        flags=np.concatenate([a.point_flags, [f.flags for f in bridge], b.point_flags]).astype(np.uint8),
-        across_spread=weight * a.across_spread + (1 - weight) * b.across_spread,
-    )

@@ -17,7 +17,7 @@ from weldseam.config import JoinConfig
 from weldseam.geometry import bend_corner, corner_before, polyline_length, unit
 from weldseam.pipeline.ends import END_BASELINE_M, end_direction
 from weldseam.pipeline.joints import one_joint
-from weldseam.pipeline.trace import TracedSeam
+from weldseam.pipeline.trace import TracedSeam, end_to_end
 
 
 def join_seams(seams: list[TracedSeam], params: JoinConfig) -> list[TracedSeam]:
@@ -138,10 +138,9 @@ def _joined(
 ) -> tuple[float, TracedSeam] | None:
     """(gap, joined seam) for the closest way to join two pieces end to end, or None."""
     best = None
-    for first_reversed in (False, True):
-        for second_reversed in (False, True):
-            a = first.positions_m[::-1] if first_reversed else first.positions_m
-            b = second.positions_m[::-1] if second_reversed else second.positions_m
+    for first_way in (first, first.reversed()):
+        for second_way in (second, second.reversed()):
+            a, b = first_way.positions_m, second_way.positions_m
             gap = b[0] - a[-1]
             distance = float(np.linalg.norm(gap))
             if distance > join_m or (best is not None and distance >= best[0]):
@@ -160,25 +159,10 @@ def _joined(
             along = distance < 1e-3 or unit(gap) @ reference >= cos_along
             if not (facing and along) or _junction((a[-1] + b[0]) / 2, others, join_m):
                 continue
-            axes_a = first.torch_axes[::-1] if first_reversed else first.torch_axes
-            axes_b = second.torch_axes[::-1] if second_reversed else second.torch_axes
-            flags_a = first.point_flags[::-1] if first_reversed else first.point_flags
-            flags_b = second.point_flags[::-1] if second_reversed else second.point_flags
-            weight = len(a) / (len(a) + len(b))
             corner = _corner(a, out_a, b, out_b, join_m)
-            bend_points = np.empty((0, 3)) if corner is None else corner[None]
-            bend_axes = np.empty((0, 3)) if corner is None else unit(axes_a[-1] + axes_b[0])[None]
-            best = (distance, TracedSeam(
-                positions_m=np.vstack([a, bend_points, b]),
-                torch_axes=np.vstack([axes_a, bend_axes, axes_b]),
-                closed=False,
-                joint=first.joint if len(a) >= len(b) else second.joint,
-                confidence=round(weight * first.confidence + (1 - weight) * second.confidence, 3),
-                half_opening_m=weight * first.half_opening_m + (1 - weight) * second.half_opening_m,
-                across_spread=weight * first.across_spread + (1 - weight) * second.across_spread,
-                sources=first.sources | second.sources,
-                flags=np.concatenate([flags_a, np.zeros(len(bend_points), np.uint8), flags_b]),
-            ))
+            between = (np.empty((0, 3)), np.empty((0, 3)), np.empty(0, np.uint8)) if corner is None else \
+                (corner[None], unit(first_way.torch_axes[-1] + second_way.torch_axes[0])[None], np.zeros(1, np.uint8))
+            best = (distance, end_to_end(first_way, between, second_way))
     return best
 
 

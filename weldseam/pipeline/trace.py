@@ -9,7 +9,7 @@ of failed sections longer than `max_gap_m` split the seam.
 from __future__ import annotations
 
 from collections import Counter
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -68,6 +68,11 @@ class TracedSeam:
                           half_opening_m=self.half_opening_m, sources=self.sources, flags=self.point_flags[index],
                           across_spread=self.across_spread)  # fmt: skip
 
+    def reversed(self) -> TracedSeam:
+        """The seam in the opposite travel order."""
+        return replace(self, positions_m=self.positions_m[::-1], torch_axes=self.torch_axes[::-1],
+                       flags=self.point_flags[::-1])  # fmt: skip
+
     def samples(self, count: int) -> np.ndarray:
         """Indices of up to `count` of its points, evenly spaced from the first to the last."""
         points = len(self.positions_m)
@@ -77,6 +82,28 @@ class TracedSeam:
     def length_m(self) -> float:
         """Arc length (m), including the closing segment of a loop."""
         return polyline_length(self.positions_m, self.closed)
+
+
+def end_to_end(a: TracedSeam, between: tuple[np.ndarray, np.ndarray, np.ndarray], b: TracedSeam,
+               holes: tuple[Hole, ...] = ()) -> TracedSeam:
+    """Open seam `a`, the points `between` its end and b's start ((K, 3) positions, (K, 3) torch
+    axes, (K,) PointFlag bits) and open seam `b` as one open seam: the joint of the piece with more
+    points; confidence, half-opening and across_spread weighted by the pieces' points (confidence
+    to 0.001); both pieces' sources and holes, then `holes`."""
+    positions, axes, flags = between
+    weight = len(a.positions_m) / (len(a.positions_m) + len(b.positions_m))
+    return TracedSeam(
+        positions_m=np.vstack([a.positions_m, np.reshape(positions, (-1, 3)), b.positions_m]),
+        torch_axes=np.vstack([a.torch_axes, np.reshape(axes, (-1, 3)), b.torch_axes]),
+        closed=False,
+        joint=a.joint if len(a.positions_m) >= len(b.positions_m) else b.joint,
+        confidence=round(weight * a.confidence + (1 - weight) * b.confidence, 3),
+        holes=(*a.holes, *b.holes, *holes),
+        half_opening_m=weight * a.half_opening_m + (1 - weight) * b.half_opening_m,
+        sources=a.sources | b.sources,
+        flags=np.concatenate([a.point_flags, np.asarray(flags, np.uint8), b.point_flags]),
+        across_spread=weight * a.across_spread + (1 - weight) * b.across_spread,
+    )
 
 
 def trace_chain(
