@@ -315,10 +315,10 @@ def test_extending_the_ends_apart_gives_the_seams_extended_one_end_after_the_oth
 
 
 
-def one_face_ahead(on_ring: bool):
-    """A stand-in for seek.next_fit giving a corner with one face unseen a step ahead: on the ring
-    of RING_RADIUS_M (a fillet's foot), or on the tangent line from the ring's point at angle 0
-    (a shadow's edge past a standing pipe's silhouette, running off along the line of sight)."""
+def one_face_ahead(on_ring: bool, flags: int = int(PointFlag.ONE_FACE)):
+    """A stand-in for seek.next_fit giving a corner with one face unseen (`flags`) a step ahead: on
+    the ring of RING_RADIUS_M (a fillet's foot), or on the tangent line from the ring's point at
+    angle 0 (a shadow's edge past a standing pipe's silhouette, running off along the line of sight)."""
 
     def fit(extension, last_point, last_axis, direction, bend, template=None):
         if on_ring:
@@ -326,20 +326,24 @@ def one_face_ahead(on_ring: bool):
             point = RING_RADIUS_M * np.array([np.cos(angle), np.sin(angle), 0.0])
         else:
             point = last_point + STEP_M * np.array([0.0, 1.0, 0.0])
-        return SectionFit(JointKind.FILLET, point, np.array([0.0, 0.0, -1.0]), flags=int(PointFlag.ONE_FACE))
+        return SectionFit(JointKind.FILLET, point, np.array([0.0, 0.0, -1.0]), flags=flags)
 
     return fit
 
 
+OUTLINE = int(PointFlag.ONE_FACE | PointFlag.OUTLINE)
+
+
 @pytest.mark.parametrize("on_ring", [True, False])
-def test_corners_with_one_face_unseen_are_followed_only_along_the_curve_of_the_full_fits(monkeypatch, on_ring):
+@pytest.mark.parametrize("flags", [int(PointFlag.ONE_FACE), OUTLINE])
+def test_corners_with_one_face_unseen_are_followed_only_along_the_curve_of_the_full_fits(monkeypatch, on_ring, flags):
     """A ring fillet (radius 50 mm) traced up to angle 0 with both faces seen, then extended by
     corners with one face seen: along the ring they carry it on (for 30 mm at least: the curve
     predicted from the full fits is a parabola, ~8 % of the arc off the ring by 35 mm); along the ring's tangent (the
     visible end of the plate in the pipe's shadow) they are taken only while they stay within
     8 % of their arc of the ring (d^2 / 2R: the first 8 mm), and the seam never leaves it by a
-    millimetre."""
-    monkeypatch.setattr(extend, "next_fit", one_face_ahead(on_ring))
+    millimetre. So are those placed from an occluder's outline (the pipe near its silhouette)."""
+    monkeypatch.setattr(extend, "next_fit", one_face_ahead(on_ring, flags))
     monkeypatch.setattr(extend, "STRATEGIES", (extend._next_step,))
     seam = ring_arc(-1.0, STEP_M / RING_RADIUS_M / 2)
     extension = Extension(None, JointKind.FILLET, replace(ExtendConfig(), max_extension_m=0.05))
@@ -413,3 +417,15 @@ def test_the_line_through_scattered_end_points_keeps_the_seams_direction_where_t
     points = np.column_stack([along, SCATTERED_ACROSS_M, np.zeros(len(along))])
     assert seam_line(points).direction @ [1.0, 0.0, 0.0] > np.cos(np.radians(8.0))
     assert end_curve(points)[0] @ [1.0, 0.0, 0.0] < np.cos(np.radians(30.0)), "the quadratic follows the scatter"
+
+
+def test_a_seam_seen_with_one_face_all_along_is_not_extended_by_corners_placed_from_an_outline(monkeypatch):
+    """With no fit of both faces, a corner whose unseen face is only an occluder's outline (the
+    edge of a standing pipe's shadow) leads nowhere: it carries no seam on."""
+    monkeypatch.setattr(extend, "next_fit", one_face_ahead(on_ring=False, flags=OUTLINE))
+    monkeypatch.setattr(extend, "STRATEGIES", (extend._next_step,))
+    seam = ring_arc(-1.0, STEP_M / RING_RADIUS_M / 2)
+    flags = np.full(len(seam.positions_m), int(PointFlag.ONE_FACE), np.uint8)
+    extension = Extension(None, JointKind.FILLET, replace(ExtendConfig(), max_extension_m=0.05))
+    steps, _ = extend.extend_end(extension, seam.positions_m, seam.torch_axes, flags)
+    assert steps == []

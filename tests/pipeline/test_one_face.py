@@ -15,10 +15,12 @@ def flange(rng, end_u=0.004, start_u=-0.025, noise=0.0002, pitch=0.0006):
     return u, rng.normal(0.0, noise, len(u))
 
 
-def wall_top(height=0.05, lean_u=0.0):
+def wall_top(height=0.05, lean_u=0.0, runs_along=True):
     """sight(): the line of sight past the flange's end meets the web's top, `height` above the
-    foot (leaning `lean_u` across), for any point past the end; nothing before it."""
-    return lambda u, w: (0.004 + lean_u, height) if u > 0.004 else None
+    foot (leaning `lean_u` across), for any point past the end; nothing before it. The top runs
+    along the seam, or (runs_along False) it is one silhouette edge, met at the same place from
+    every point along."""
+    return lambda u, w, along=0.0: (0.004 + lean_u, height, along if runs_along else 0.0) if u > 0.004 else None
 
 
 def test_a_flange_ending_under_a_wall_top_is_a_corner_with_the_bisector(rng):
@@ -33,7 +35,7 @@ def test_a_flange_ending_under_a_wall_top_is_a_corner_with_the_bisector(rng):
 
 def test_a_plate_edge_with_nothing_nearer_past_it_is_not_a_corner(rng):
     u, w = flange(rng)
-    assert one_face_corner(u, w, UP, lambda u, w: None, PARAMS, 0.025) is None
+    assert one_face_corner(u, w, UP, lambda u, w, along=0.0: None, PARAMS, 0.025) is None
 
 
 def test_a_low_step_past_the_end_is_not_a_wall(rng):
@@ -65,3 +67,30 @@ def test_mixed_pixels_past_the_end_and_a_hole_in_the_flange_do_not_move_the_corn
     mixed_u, mixed_w = np.array([0.0046, 0.0051]), np.array([0.004, 0.009])  # between the flange and the top
     fit = one_face_corner(np.r_[u, mixed_u], np.r_[w, mixed_w], UP, wall_top(), PARAMS, 0.025)
     assert abs(fit.u - 0.004) < 0.0004
+
+
+def test_a_flange_ending_in_a_posts_shadow_is_marked_as_placed_from_an_outline(rng):
+    """Past a standing pipe the flange ends where the pipe hides it: the shadow's edge runs along
+    the line of sight, and every sight past it meets the pipe's one silhouette edge, which does not
+    run along with the section as a wall's top does."""
+    u, w = flange(rng)
+    assert one_face_corner(u, w, UP, wall_top(runs_along=False), PARAMS, 0.025).geometry.outline_wall
+    assert not one_face_corner(u, w, UP, wall_top(runs_along=True), PARAMS, 0.025).geometry.outline_wall
+
+
+def test_a_wall_ending_beside_the_section_is_found_looking_back_along_it(rng):
+    """At a web's end the sight further along meets nothing; looking back along the seam it meets
+    the top as far back."""
+    u, w = flange(rng)
+    top = wall_top()
+    ends_here = lambda u_, w_, along=0.0: top(u_, w_, along) if along <= 0 else None  # noqa: E731
+    assert not one_face_corner(u, w, UP, ends_here, PARAMS, 0.025).geometry.outline_wall
+
+
+def test_a_dropout_in_the_wall_top_beside_the_section_does_not_make_it_an_outline(rng):
+    """The sights along the seam meet nothing (holes in the web's top): nothing says the top stays
+    put, and the corner stands as a web's."""
+    u, w = flange(rng)
+    top = wall_top()
+    only_here = lambda u_, w_, along=0.0: top(u_, w_, along) if along == 0 else None  # noqa: E731
+    assert not one_face_corner(u, w, UP, only_here, PARAMS, 0.025).geometry.outline_wall

@@ -3,7 +3,7 @@ import numpy as np
 from weldseam.config import TraceConfig
 from weldseam.pipeline.joints import JointGeometry, JointKind
 from weldseam.pipeline.order import Chain
-from weldseam.pipeline.section import SectionFit
+from weldseam.pipeline.section import PointFlag, SectionFit
 from weldseam.pipeline.trace import TracedSeam, consistent, inside_traced, on_fits, trace_chain
 
 STEP_M = 0.002
@@ -72,6 +72,29 @@ class ValleySurface:
             fits.append(SectionFit(JointKind.FILLET if found else None, point, np.array([0.0, 0.0, -1.0]),
                                    JointGeometry(included_deg=140.0)))
         return fits
+
+
+class OneFaceSurface:
+    """A stand-in FineSurface whose every section is an inside corner with one face unseen along
+    y = 0, with `flags`."""
+
+    def __init__(self, flags):
+        self.flags = flags
+
+    def fit_many(self, centres, travel, axes, lateral, kinds=None):
+        return [SectionFit(JointKind.FILLET, np.array([centre[0], 0.0, 0.0]), np.array([0.0, 0.0, -1.0]),
+                           JointGeometry(included_deg=90.0, faces_seen=1), flags=self.flags) for centre in centres]
+
+
+def test_corners_placed_from_an_outline_alone_are_no_seam():
+    """A T-joint seen from above is traced from its one-face corners; the edge of a standing
+    pipe's shadow, whose corners are placed from the pipe's outline, is not."""
+    along = np.arange(0.0, 0.06, STEP_M)
+    chain = Chain(np.column_stack([along, np.zeros_like(along), np.zeros_like(along)]), False)
+    axes = np.tile([0.0, 0.0, -1.0], (len(along), 1))
+    (seam,) = trace_chain(chain, axes, {}, OneFaceSurface(int(PointFlag.ONE_FACE)), TraceConfig())
+    assert len(seam.positions_m) == len(along)
+    assert trace_chain(chain, axes, {}, OneFaceSurface(int(PointFlag.ONE_FACE | PointFlag.OUTLINE)), TraceConfig()) == []
 
 
 def test_a_chain_beside_the_seam_its_sections_find_is_traced_again_on_that_seam():

@@ -183,12 +183,21 @@ class SeamEnd:
         """The fitted (not bridged) points on the current face."""
         return np.array(self.positions[self.face_start:])[~np.array(self.bridged[self.face_start:])]
 
+    def admits(self, fit: SectionFit) -> bool:
+        """Whether `fit` may carry the seam on: a fit of both faces anywhere; a corner with one face
+        unseen near the curve of the last fit with both faces seen (on_curve), or anywhere on a
+        seam without one, unless its unseen face was placed from an outline (PointFlag.OUTLINE):
+        that one needs the curve."""
+        if not fit.flags & PointFlag.ONE_FACE:
+            return True
+        if not self.last_full:
+            return not fit.flags & PointFlag.OUTLINE
+        return self.on_curve(fit.point_m)
+
     def on_curve(self, point: np.ndarray) -> bool:
         """Whether `point` (3,), reached from the last point, lies within max(half a step,
-        ONE_FACE_DRIFT x its arc) of the curve at the last fit with both faces seen, sideways of
-        the torch axis; True when the seam has no such fit."""
-        if not self.last_full:
-            return True
+        ONE_FACE_DRIFT x its arc) of the curve at the last fit with both faces seen (last_full),
+        sideways of the torch axis."""
         index, direction, bend = self.last_full
         anchor = np.asarray(self.positions[index])
         arc = polyline_length(np.array(self.positions[index:])) + float(np.linalg.norm(point - self.positions[-1]))
@@ -287,12 +296,12 @@ def _last_full(positions: np.ndarray, flags: np.ndarray | None) -> tuple:
 def _next_step(extension: Extension, end: SeamEnd) -> Step | None:
     """The next fit ahead along the predicted curve (seek.next_fit, bridged over dropouts); a
     corner with one face unseen only near the curve of the last fit with both faces seen
-    (SeamEnd.on_curve): past a pipe's silhouette the end of the plate seen is a shadow's edge,
+    (SeamEnd.admits): past a pipe's silhouette the end of the plate seen is a shadow's edge,
     running off the pipe's foot along the line of sight."""
     line = seam_line(end.fitted)
     for heading in end.aims(line):
         fit = next_fit(extension, end.positions[-1], end.axes[-1], heading, end.template(), line)
-        if fit is not None and not (fit.flags & PointFlag.ONE_FACE and not end.on_curve(fit.point_m)):
+        if fit is not None and end.admits(fit):
             return Step([fit])
     return None
 

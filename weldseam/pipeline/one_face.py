@@ -14,6 +14,13 @@ top edge, whose face was too oblique to measure), and the torch axis is the bise
 faces. That face must be seen edge-on or nearly (a wall the camera sees from behind hides the
 flange's end: past it is the wall's far side's shadow, not its foot). A fit records that one
 face was not seen (JointGeometry.faces_seen = 1).
+
+A wall's top edge runs along the seam: looked at a little further along, the line of sight meets
+it as far along. Past a standing pipe the flange ends at its shadow's edge, which runs along the
+line of sight, and every sight past it meets the pipe's one silhouette edge; so does a sight past
+the pipe's foot near its silhouette. Such a corner is marked (JointGeometry.outline_wall): by
+itself it may be a shadow's edge, and only the curve of a seam fitted with both faces may lead to
+it (extend).
 """
 
 from __future__ import annotations
@@ -47,15 +54,19 @@ EDGE_ON_COS = 0.0
 # of its foot. A corner far from square needs both its faces seen.
 MIN_INCLUDED_DEG = 80.0
 MAX_INCLUDED_DEG = 100.0
+# The unseen wall runs along the seam, and so does its top edge: the line of sight this far along
+# the travel meets it as far along. Past a post or pipe the flange ends in its shadow, whose edge
+# runs along the line of sight: every sight past it meets the occluder's one silhouette edge.
+WALL_STEP_M = 0.006
 
 
 def one_face_corner(u, w, toward, sight, params: JointsConfig, half_width_m: float):
     """The corner of a profile (u ascending, m; the window |u| <= half_width_m) where a straight face
     ends at a gap in the points, or short of the window's edge, and the camera sees a wall's top
     past it, or None (the end nearest the section's centre when several qualify). `toward`:
-    (u, w) of the unit direction toward the camera in the section plane. sight(u, w) -> (u, w) of
-    the nearest scan point on the line of sight through the profile point (u, w) that is at least a
-    fillet leg nearer to the camera, or None."""
+    (u, w) of the unit direction toward the camera in the section plane. sight(u, w, along=0) -> (u, w,
+    along) of the nearest scan point on the line of sight through the profile point (u, w) moved
+    `along` the travel (m) that is at least a fillet leg nearer to the camera, or None."""
     if len(u) < 12:
         return None
     faces = _faces(u, w, np.split(np.arange(len(u)), np.flatnonzero(np.diff(u) > GAP_M) + 1))
@@ -83,6 +94,15 @@ def _faces(u, w, runs: list[np.ndarray]) -> list[np.ndarray]:
     return faces
 
 
+def _runs_along(looked_at, top, sight) -> bool:
+    """Whether the top seen past `looked_at` (u, w) may be the edge of a wall running along the
+    seam: looked at WALL_STEP_M further along the travel (or back), the line of sight meets it at
+    least half as far along, or meets nothing (a dropout in the top). Not so when what it meets
+    stays put: the silhouette of a post or pipe whose shadow the flange ends in."""
+    met = [(step, found) for step in (WALL_STEP_M, -WALL_STEP_M) if (found := sight(*looked_at, step)) is not None]
+    return not met or any((found[2] - top[2]) * np.sign(step) >= WALL_STEP_M / 2 for step, found in met)
+
+
 def _corner(u, w, side, view, sight, params: JointsConfig):
     """The corner where the face of `u`, `w` (one run of points) ends toward `side` (+1: its
     largest u), or None."""
@@ -106,10 +126,11 @@ def _corner(u, w, side, view, sight, params: JointsConfig):
     # are a dropout). Tested before the line of sight is looked up: it needs only the face.
     if not -EDGE_ON_COS <= along_face @ np.asarray(view) <= OBLIQUE_COS:
         return None
-    top = next((found for past in PAST_END_M if (found := sight(*(face_end - past * along_face))) is not None), None)
-    if top is None:
+    looked = next(((past, top) for past in PAST_END_M if (top := sight(*(face_end - past * along_face))) is not None), None)
+    if looked is None:
         return None
-    wall = np.asarray(top) - face_end
+    past, top = looked
+    wall = np.asarray(top[:2]) - face_end
     if wall @ normal < params.fillet_min_leg_m:
         return None  # nothing a face's length above the face's end: a plate's edge, not a wall
     wall = unit(wall)
@@ -117,7 +138,8 @@ def _corner(u, w, side, view, sight, params: JointsConfig):
     if not MIN_INCLUDED_DEG <= included <= MAX_INCLUDED_DEG:
         return None
     axis = -unit(along_face + wall)
-    geometry = JointGeometry(included_deg=included, legs_m=None, faces_seen=1)
+    outline_wall = not _runs_along(face_end - past * along_face, top, sight)
+    geometry = JointGeometry(included_deg=included, legs_m=None, faces_seen=1, outline_wall=outline_wall)
     outline = (tuple(face_end + along_face), tuple(face_end), tuple(face_end + wall))
     residual_m = middle(np.abs(residual[inliers]))
     return ProfileFit(JointKind.FILLET, float(face_end[0]), float(face_end[1]), float(axis[0]), float(axis[1]),

@@ -52,13 +52,17 @@ def section_params(config: PlanConfig) -> SectionParams:
 
 class PointFlag(IntFlag):
     """What a seam point rests on besides a full fit of its section: one face of a corner unseen
-    (one_face), a groove bridged over a dropout from the edges still seen (bridge), a stretch
+    (one_face) and maybe placed from an outline, a groove bridged over a dropout from the edges still seen (bridge), a stretch
     interpolated across a hole in the scan (holes)."""
 
     ONE_FACE = 1
     BRIDGED = 2
     INTERPOLATED = 4
     ROUGH = 8  # the model's outline lies ROUGH_FIT_M or more from the section's points (median)
+    # One face unseen, the other placed from an occluder's outline that does not run along the seam
+    # (one_face): a standing pipe near its silhouette, or past it the edge of its shadow. Such a
+    # corner is no seam by itself; an extension takes it where the curve of full fits leads.
+    OUTLINE = 16
 
 
 # How sure a pose is, by the least sure of what its point rests on (1: a full fit of its section).
@@ -115,6 +119,7 @@ class Profile:
         point = self.centre + fit.u * self.lateral - fit.w * self.axis
         torch_axis = unit(fit.axis_u * self.lateral - fit.axis_w * self.axis)
         flags = ((PointFlag.ONE_FACE if fit.geometry.faces_seen == 1 else 0) | (PointFlag.BRIDGED if bridged else 0)
+                 | (PointFlag.OUTLINE if fit.geometry.outline_wall else 0)
                  | (PointFlag.ROUGH if fit.residual_m >= ROUGH_FIT_M else 0))  # fmt: skip
         return SectionFit(fit.kind, point, torch_axis, fit.geometry, bridged, flags=int(flags))
 
@@ -130,19 +135,20 @@ class FineSurface:
     params: SectionParams
     view: ViewBuffer | None = None
 
-    def sight(self, profile: Profile, u: float, w: float) -> tuple[float, float] | None:
-        """(u, w) of the wall top the camera sees past the profile point (u, w): the nearest scan
-        point on the line of sight through it, at least a fillet leg nearer to the camera; the
-        near edge of that surface in the section when it lies in the section's slab. None
-        without a single camera (view) or when nothing is nearer."""
+    def sight(self, profile: Profile, u: float, w: float, along: float = 0.0) -> tuple[float, float, float] | None:
+        """(u, w, along) of the wall top the camera sees past the profile point (u, w) moved `along`
+        the travel (m): the nearest scan point on the line of sight through it, at least a fillet
+        leg nearer to the camera, in the section's frame (along: its offset along the travel,
+        axis x lateral). None without a single camera (view) or when nothing is nearer."""
         if self.view is None:
             return None
-        point = profile.centre + u * profile.lateral - w * profile.axis
+        travel = np.cross(profile.axis, profile.lateral)
+        point = profile.centre + u * profile.lateral - w * profile.axis + along * travel
         index = self.view.nearer_than(point[None], self.params.joints.fillet_min_leg_m)[0]
         if index < 0:
             return None
         offset = self.view.points[index] - profile.centre
-        return float(offset @ profile.lateral), float(-(offset @ profile.axis))
+        return float(offset @ profile.lateral), float(-(offset @ profile.axis)), float(offset @ travel)
 
     def profile(self, centre, travel, axis, lateral) -> Profile:
         """The section at `centre` across unit `travel`, in the frame (axis, lateral) given.
@@ -185,7 +191,7 @@ class FineSurface:
         order = np.argsort(profile.u, kind="stable")
         return one_face_corner(
             profile.u[order], profile.w[order], (float(toward @ profile.lateral), float(-(toward @ profile.axis))),
-            lambda u, w: self.sight(profile, u, w), self.params.joints, self.params.half_width_m,
+            lambda u, w, along=0.0: self.sight(profile, u, w, along), self.params.joints, self.params.half_width_m,
         )
 
     def fit_many(self, centres, travel, axes, lateral, kinds: Collection[JointKind] | None = None) -> list[SectionFit]:

@@ -18,7 +18,7 @@ from weldseam.config import TraceConfig
 from weldseam.geometry import polyline_length, unit
 from weldseam.pipeline.joints import JointKind, akin, recentred
 from weldseam.pipeline.order import Chain
-from weldseam.pipeline.section import RECENTRE_M, FineSurface, SectionFit, section_frames
+from weldseam.pipeline.section import RECENTRE_M, FineSurface, PointFlag, SectionFit, section_frames
 
 # A section's seam point far from the median of this many sections around it jumps off the seam's
 # line and is dropped (trace.max_jump_m).
@@ -27,6 +27,7 @@ INSIDE_FRACTION = 0.8
 # A chain whose sections find the seam this far from it (median) is moved onto what they found
 # (on_fits), each point by the median offset of this many fits around it.
 ON_FITS_WINDOW = 5
+OUTLINE_REASON = "a corner with one face unseen whose other face is only an occluder's outline (a shadow's edge?)"
 
 
 @dataclass(frozen=True)
@@ -120,7 +121,7 @@ def trace_chain(
     rest = np.array([k for k in range(len(chain.points)) if k not in probe_fits], dtype=int)
     sought = akin({fit.kind for fit in probe_fits.values() if fit.kind is not None}) or None  # none: any
     fitted = iter(surface.fit_many(chain.points[rest], travel[rest], axes[rest], lateral[rest], sought))
-    fits = [probe_fits[k] if k in probe_fits else next(fitted) for k in range(len(chain.points))]
+    fits = evidence([probe_fits[k] if k in probe_fits else next(fitted) for k in range(len(chain.points))])
     kinds = Counter(fit.kind for fit in fits if fit.kind is not None)
     if not kinds:
         return []
@@ -130,15 +131,15 @@ def trace_chain(
     if moved is not None:
         chain = moved
         travel, axes, lateral = section_frames(chain.points, approx_axes, chain.closed)
-        fits = surface.fit_many(chain.points, travel, axes, lateral, akin({joint}))
+        fits = evidence(surface.fit_many(chain.points, travel, axes, lateral, akin({joint})))
         count = sum(fit.kind == joint for fit in fits)
     confidence = count / len(fits)
     if confidence < params.min_valid_fraction:
         return []
     # A section another model explains better is fitted again seeking the chain's joint only.
     other = np.array([k for k, fit in enumerate(fits) if fit.kind is not None and fit.kind != joint], dtype=int)
-    for k, fit in zip(other, surface.fit_many(chain.points[other], travel[other], axes[other], lateral[other],
-                                              {joint})):
+    for k, fit in zip(other, evidence(surface.fit_many(chain.points[other], travel[other], axes[other],
+                                                       lateral[other], {joint}))):
         fits[k] = fit
     positions, axes = np.array([fit.point_m for fit in fits]), np.array([fit.torch_axis for fit in fits])
     # A shallow corner's point is known less well across than a square one's (across_spread).
@@ -160,6 +161,14 @@ def trace_chain(
             )
         )
     return seams
+
+
+def evidence(fits: list[SectionFit]) -> list[SectionFit]:
+    """`fits` with each corner placed from an occluder's outline (PointFlag.OUTLINE) taken as no
+    fit: by itself it may be the edge of a shadow. Only an extension takes it, along the curve of a
+    seam's full fits (extend)."""
+    return [SectionFit(None, fit.point_m, fit.torch_axis, reason=OUTLINE_REASON) if fit.flags & PointFlag.OUTLINE
+            else fit for fit in fits]  # fmt: skip
 
 
 def on_fits(chain: Chain, fits: list[SectionFit], joint: JointKind) -> Chain | None:

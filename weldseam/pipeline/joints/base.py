@@ -30,13 +30,15 @@ class JointGeometry:
     """What a fit measured of the joint (None: not measured for this kind): the opening's width
     at the surface (m), the depth below the surface (m), the included angle between the two
     walls or faces (degrees), the two legs (m, left and right of the seam), and how many of the
-    joint's two faces the scan saw (one: the other was placed from what the camera saw past it)."""
+    joint's two faces the scan saw (one: the other was placed from what the camera saw past it) and
+    whether that was an occluder's outline rather than a wall's top running along the seam."""
 
     opening_m: float | None = None
     depth_m: float | None = None
     included_deg: float | None = None
     legs_m: tuple[float, float] | None = None
     faces_seen: int = 2
+    outline_wall: bool = False
 
     @property
     def across_spread(self) -> float:
