@@ -8,7 +8,7 @@ position error <= 0.5 mm; >= 95 % of the seen seam within 2 mm of the path; mean
 error <= 3 degrees; in a scene with two kinds (a lap and a fillet, a V-groove and a square
 butt), each seam named by its own. Known gaps are strict xfails: when a change closes one, its
 test fails until the mark is removed, so the list stays the truth about what the planner does.
-Seeds 0-4; today 182 of the 220 criteria hold (lap, bevel, outside corner, square butt, tack
+Seeds 0-4; today 184 of the 220 criteria hold (lap, bevel, outside corner, square butt, tack
 welds and the two-kind scenes mostly; pipe on plate, saddle and the shallow valley least), and
 every seam of the two-kind scenes gets its own kind.
 """
@@ -57,11 +57,8 @@ KNOWN_GAPS: dict[tuple[str, int], set[str]] = {
     ("valley", 1): {"position", "coverage"},
     # Found since the wide valley pass (20 mm); its 147-degree corner scatters 1.3 mm across.
     ("valley", 4): {"position", "coverage", "axis"},
-    # Both seams found with their kinds; a lap's trace stops 20-75 mm short of one end (1, 2),
-    # a fillet's breaks up over its first 40 mm (3): the lap's and fillet's own coverage gaps.
+    # Both seams found with their kinds; the lap's trace stops short of one end.
     ("lap_and_fillet", 1): {"coverage"},
-    ("lap_and_fillet", 2): {"coverage"},
-    ("lap_and_fillet", 3): {"coverage"},
 }
 # Scenes holding two joint kinds: each seam must come out named by its own.
 MIXED_FAMILIES = ("lap_and_fillet", "v_groove_and_square_butt")

@@ -31,11 +31,7 @@ CASES = [("box", 0, True), ("box", 1, False), ("box", 1, True), ("pipe", 0, True
 # assembly on merged clouds, not in the merge (ICP leaves each frame within ~0.3 mm, see
 # tests/pipeline/test_merge.py), and come and go with the noise: with exact poses and ICP off,
 # seeds 0-4 pass every criterion for 1 box and 1 pipe (with ICP on: 0 and 2).
-KNOWN_GAPS = {
-    # Coverage 0.92: the last 18 mm of the third face lie in a sensor dropout that reaches the
-    # seam's end (no point within 10 mm of the seam there), so nothing is beyond it to cross to.
-    ("box", 0, True): {"accuracy"},
-}
+KNOWN_GAPS: dict[tuple, set[str]] = {}
 
 
 def known_gap(request, planned, criterion):

@@ -7,7 +7,7 @@ import pytest
 
 from weldseam.geometry import unit
 from weldseam.synthetic.scenes import (
-    FAMILIES, block_groove, curved_groove, default_camera, fillet_t, make_scan, visible_mask,
+    FAMILIES, block_groove, curved_groove, default_camera, fillet_t, make_scan, returned_mask, visible_mask,
     v_butt,
 )
 from weldseam.synthetic.sensor import D415, SensorNoise, cast_rays, look_at
@@ -127,6 +127,27 @@ def test_visible_mask_honours_occlusion_and_viewing_angle():
     assert not visible_mask(scene, seam, below).any()  # the table is in the way
     grazing = look_at(scene.camera_target_m + [0.45, 0, 0.1], scene.camera_target_m)
     assert not visible_mask(scene, seam, grazing).any()  # 77 deg from the torch axis
+
+
+def test_a_seam_inside_a_sensor_hole_is_not_observed():
+    """Where the sensor returned no depth around a truth point's pixel (a hole blob), the scan
+    holds nothing of the seam there: it does not count as seen, whatever the mesh shows."""
+    rng = np.random.default_rng(12)
+    scene = v_butt(rng, yaw_deg=0.0)
+    seam = scene.seams[0]
+    scan = make_scan(scene, rng, SensorNoise.clean())
+    assert scan.visible[0].mean() > 0.9
+    middle = seam.points_m[len(seam.points_m) // 2]
+    local = np.linalg.inv(scan.T_base_camera) @ np.r_[middle, 1.0]
+    col = int(round(D415.fx * local[0] / local[2] + D415.cx))
+    row = int(round(D415.fy * local[1] / local[2] + D415.cy))
+    holed = scan.depth.copy()
+    holed[row - 15:row + 16, col - 15:col + 16] = 0
+    returned = returned_mask(holed, seam, scan.T_base_camera, D415)
+    lost = np.linalg.norm(seam.points_m - middle, axis=1) < 0.005
+    assert lost.any() and not returned[lost].any()
+    far = np.linalg.norm(seam.points_m - middle, axis=1) > 0.03
+    assert returned[far & scan.visible[0]].all()
 
 
 def test_block_groove_view_shows_the_top_and_one_side():

@@ -699,12 +699,31 @@ def visible_mask(
     return in_image & unoccluded & facing
 
 
+def returned_mask(depth: np.ndarray, seam: TruthSeam, T_base_camera: np.ndarray, intrinsics: Intrinsics) -> np.ndarray:
+    """(M,) bool: truth points near whose pixel the sensor returned a depth (any of the 3 x 3
+    pixels around it valid in `depth`, 0 = no data). A stretch of seam inside one of the sensor's
+    holes was not observed, whatever the mesh would show there."""
+    local = transform_points(np.linalg.inv(T_base_camera), seam.points_m)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        col = np.round(intrinsics.fx * local[:, 0] / local[:, 2] + intrinsics.cx)
+        row = np.round(intrinsics.fy * local[:, 1] / local[:, 2] + intrinsics.cy)
+    inside = (local[:, 2] > 0) & (col >= 0) & (col < depth.shape[1]) & (row >= 0) & (row < depth.shape[0])
+    col, row = np.where(inside, col, 0).astype(int), np.where(inside, row, 0).astype(int)
+    returned = np.zeros(len(local), bool)
+    for dr in (-1, 0, 1):
+        for dc in (-1, 0, 1):
+            r, c = np.clip(row + dr, 0, depth.shape[0] - 1), np.clip(col + dc, 0, depth.shape[1] - 1)
+            returned |= depth[r, c] > 0
+    return inside & returned
+
+
 def make_scan(
     scene: SyntheticScene, rng: np.random.Generator, noise: SensorNoise = SensorNoise(),
     T_base_camera: np.ndarray | None = None, intrinsics: Intrinsics = D415,
 ) -> SyntheticScan:
     """Render `scene` (camera from `default_camera` unless given) and record which truth
-    points the camera observed."""
+    points the camera observed: in its view (visible_mask) and where the sensor returned a depth
+    (returned_mask)."""
     if T_base_camera is None:
         T_base_camera = default_camera(scene, rng)
     depth = render_depth(scene.mesh, T_base_camera, intrinsics, rng, noise)
@@ -714,5 +733,6 @@ def make_scan(
         T_base_camera=T_base_camera,
         points_m=scan_points(depth, intrinsics, T_base_camera),
         camera_origin_m=T_base_camera[:3, 3].copy(),
-        visible=tuple(visible_mask(scene, s, T_base_camera, intrinsics) for s in scene.seams),
+        visible=tuple(visible_mask(scene, s, T_base_camera, intrinsics) & returned_mask(depth, s, T_base_camera, intrinsics)
+                      for s in scene.seams),
     )
