@@ -38,6 +38,12 @@ def seam_error_mm(scene, scan, placement):
     return cKDTree(seam).query(transform_points(placement, seam[scan.visible[0]]))[0].mean() * 1000
 
 
+def seam_shift_mm(scene, scan, placement):
+    """Mean distance (mm) the seam points this frame saw are moved by `placement` (4, 4)."""
+    seen = scene.seams[0].points_m[scan.visible[0]]
+    return np.linalg.norm(transform_points(placement, seen) - seen, axis=1).mean() * 1000
+
+
 def test_icp_recovers_an_injected_pose_error(box):
     scene, scans, poses, frames = box
     merged = merge_frames(frames, np.array([p[:3, 3] for p in poses]), PARAMS)
@@ -195,9 +201,11 @@ def test_a_pose_error_along_a_slide_no_shared_face_fixes_is_taken_out_by_the_edg
         patch.setattr(register, "register_open", lambda registration, *_: registration)
         before = merge_frames(frames, np.array([p[:3, 3] for p in poses]), PARAMS)
     merged = merge_frames(frames, np.array([p[:3, 3] for p in poses]), PARAMS)
-    errors_before = [seam_error_mm(scene, scans[k], left_over(before, scans, poses, k)) for k in (1, 2)]
+    # How far the planes leave each frame's seen seam points from where they belong (a slide along
+    # the groove moves them along the truth, so their distance to it shows only at the bends).
+    moved_before = [seam_shift_mm(scene, scans[k], left_over(before, scans, poses, k)) for k in (1, 2)]
     errors_after = [seam_error_mm(scene, scans[k], left_over(merged, scans, poses, k)) for k in (1, 2)]
-    assert max(errors_before) > 2.0, errors_before
+    assert max(moved_before) > 2.0, moved_before
     assert max(errors_after) < 1.0, errors_after
 
 
