@@ -7,7 +7,7 @@ import pytest
 
 from weldseam.geometry import unit
 from weldseam.synthetic.scenes import (
-    FAMILIES, block_groove, curved_groove, default_camera, fillet_t, make_scan, returned_mask, visible_mask,
+    FAMILIES, block_groove, curved_groove, default_camera, fillet_t, make_scan, pixel_of, returned_mask, visible_mask,
     v_butt,
 )
 from weldseam.synthetic.sensor import D415, SensorNoise, cast_rays, look_at
@@ -138,9 +138,7 @@ def test_a_seam_inside_a_sensor_hole_is_not_observed():
     scan = make_scan(scene, rng, SensorNoise.clean())
     assert scan.visible[0].mean() > 0.9
     middle = seam.points_m[len(seam.points_m) // 2]
-    local = np.linalg.inv(scan.T_base_camera) @ np.r_[middle, 1.0]
-    col = int(round(D415.fx * local[0] / local[2] + D415.cx))
-    row = int(round(D415.fy * local[1] / local[2] + D415.cy))
+    col, row, _ = (int(round(v[0])) for v in pixel_of(middle[None], scan.T_base_camera, D415))
     holed = scan.depth.copy()
     holed[row - 15:row + 16, col - 15:col + 16] = 0
     returned = returned_mask(holed, seam, scan.T_base_camera, D415)

@@ -52,8 +52,8 @@ def section_params(config: PlanConfig) -> SectionParams:
 
 class PointFlag(IntFlag):
     """What a seam point rests on besides a full fit of its section: one face of a corner unseen
-    (one_face) and maybe placed from an outline, a groove bridged over a dropout from the edges still seen (bridge), a stretch
-    interpolated across a hole in the scan (holes)."""
+    (one_face), maybe placed from an occluder's outline; a groove bridged over a dropout from the
+    edges still seen (bridge); a stretch interpolated across a hole in the scan (holes)."""
 
     ONE_FACE = 1
     BRIDGED = 2

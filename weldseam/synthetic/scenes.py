@@ -671,6 +671,16 @@ def default_camera(
     return look_at(target + distance * direction, target, up)
 
 
+def pixel_of(points_m: np.ndarray, T_base_camera: np.ndarray, intrinsics: Intrinsics):
+    """(col, row, depth) each (M,) of base-frame `points_m` (M, 3) in the image of a camera at
+    `T_base_camera`: col = fx x / z + cx, row = fy y / z + cy (pixels, not rounded), depth = z (m)
+    in the camera frame (col and row inf or nan where z <= 0)."""
+    local = transform_points(np.linalg.inv(T_base_camera), points_m)
+    depth = local[:, 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return intrinsics.fx * local[:, 0] / depth + intrinsics.cx, intrinsics.fy * local[:, 1] / depth + intrinsics.cy, depth
+
+
 def visible_mask(
     scene: SyntheticScene, seam: TruthSeam, T_base_camera: np.ndarray,
     intrinsics: Intrinsics = D415, *, occlusion_tolerance_m: float = 0.001,
@@ -681,11 +691,7 @@ def visible_mask(
     more than `occlusion_tolerance_m` before it (V-groove points are in the air: the ray is
     cast to them), and the ray is within `max_view_angle_deg` of the torch axis."""
     camera = T_base_camera[:3, 3]
-    local = transform_points(np.linalg.inv(T_base_camera), seam.points_m)
-    depth = local[:, 2]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        col = intrinsics.fx * local[:, 0] / depth + intrinsics.cx
-        row = intrinsics.fy * local[:, 1] / depth + intrinsics.cy
+    col, row, depth = pixel_of(seam.points_m, T_base_camera, intrinsics)
     in_image = (depth > 0) & (col > -0.5) & (col < intrinsics.width - 0.5) & (row > -0.5) & (
         row < intrinsics.height - 0.5
     )
@@ -703,13 +709,11 @@ def returned_mask(depth: np.ndarray, seam: TruthSeam, T_base_camera: np.ndarray,
     """(M,) bool: truth points near whose pixel the sensor returned a depth (any of the 3 x 3
     pixels around it valid in `depth`, 0 = no data). A stretch of seam inside one of the sensor's
     holes was not observed, whatever the mesh would show there."""
-    local = transform_points(np.linalg.inv(T_base_camera), seam.points_m)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        col = np.round(intrinsics.fx * local[:, 0] / local[:, 2] + intrinsics.cx)
-        row = np.round(intrinsics.fy * local[:, 1] / local[:, 2] + intrinsics.cy)
-    inside = (local[:, 2] > 0) & (col >= 0) & (col < depth.shape[1]) & (row >= 0) & (row < depth.shape[0])
+    col, row, z = pixel_of(seam.points_m, T_base_camera, intrinsics)
+    col, row = np.round(col), np.round(row)
+    inside = (z > 0) & (col >= 0) & (col < depth.shape[1]) & (row >= 0) & (row < depth.shape[0])
     col, row = np.where(inside, col, 0).astype(int), np.where(inside, row, 0).astype(int)
-    returned = np.zeros(len(local), bool)
+    returned = np.zeros(len(z), bool)
     for dr in (-1, 0, 1):
         for dc in (-1, 0, 1):
             r, c = np.clip(row + dr, 0, depth.shape[0] - 1), np.clip(col + dc, 0, depth.shape[1] - 1)
