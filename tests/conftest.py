@@ -75,12 +75,9 @@ def planned_broad_case(family: str, seed: int, last: str):
                             PlanConfig(), last=last)  # fmt: skip
 
 
-def rejected_centres(state, rejection) -> list[np.ndarray]:
-    """The centres (3,) of the candidates a run rejected for `rejection`."""
-    return [np.array(c.centre_m) for c in state.chain_candidates if c.rejection == rejection]
-
-
-def gap_to_fixtures_m(scene, point: np.ndarray) -> float:
-    """The distance (m) from `point` to the nearest of the scene's fixtures' bounding boxes."""
-    return min(float(np.linalg.norm(np.maximum(0.0, np.maximum(f.bounds[0] - point, point - f.bounds[1]))))
-               for f in scene.fixtures)  # fmt: skip
+def rejected_gaps_to_fixtures_m(scene, state, rejection) -> list[float]:
+    """For each candidate a run rejected for `rejection`, the distance (m) from its centre to the
+    nearest of the scene's fixtures' bounding boxes."""
+    centres = [np.array(c.centre_m) for c in state.chain_candidates if c.rejection == rejection]
+    return [min(float(np.linalg.norm(np.maximum(0.0, np.maximum(f.bounds[0] - centre, centre - f.bounds[1]))))
+                for f in scene.fixtures) for centre in centres]  # fmt: skip

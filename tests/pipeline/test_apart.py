@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from tests.conftest import gap_to_fixtures_m, planned_broad_case, rejected_centres
+from tests.conftest import planned_broad_case, rejected_gaps_to_fixtures_m
 from weldseam.config import PlanConfig
 from weldseam.pipeline.apart import joined_seams, standing_apart
 from weldseam.pipeline.joints import JointKind
@@ -71,6 +71,6 @@ def test_a_clamp_post_standing_beside_a_block_gives_no_fillet():
     scene, state = planned_broad_case("block_groove", 9, "split")
     truth = cKDTree(np.vstack([seam.points_m for seam in scene.seams]))
     assert len(state.seams) == 1 and np.median(truth.query(state.seams[0].positions_m)[0]) < 0.001
-    apart = rejected_centres(state, Rejection.APART)
-    assert apart
-    assert all(gap_to_fixtures_m(scene, centre) < 0.01 for centre in apart)  # beside a fixture (the clamp's post)
+    gaps_m = rejected_gaps_to_fixtures_m(scene, state, Rejection.APART)
+    assert gaps_m
+    assert all(gap < 0.01 for gap in gaps_m)  # beside a fixture (the clamp's post)

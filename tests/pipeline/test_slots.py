@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from tests.conftest import gap_to_fixtures_m, planned_broad_case, rejected_centres
+from tests.conftest import planned_broad_case, rejected_gaps_to_fixtures_m
 from weldseam.config import PlanConfig
 from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.section import FineSurface, section_params
@@ -84,9 +84,9 @@ def test_a_clamp_post_beside_a_block_gives_no_seam_and_the_groove_is_kept():
     scene, state = planned_broad_case("block_groove", 1, "split")
     truth = cKDTree(np.vstack([seam.points_m for seam in scene.seams]))
     assert len(state.seams) == 1 and np.median(truth.query(state.seams[0].positions_m)[0]) < 0.0005
-    slots = rejected_centres(state, Rejection.SLOT)
-    assert slots
-    assert all(gap_to_fixtures_m(scene, centre) < 0.01 for centre in slots)  # beside a fixture (the clamp's post)
+    gaps_m = rejected_gaps_to_fixtures_m(scene, state, Rejection.SLOT)
+    assert gaps_m
+    assert all(gap < 0.01 for gap in gaps_m)  # beside a fixture (the clamp's post)
 
 
 # ------------------------------------------------------------------ a gap down to the table
@@ -157,9 +157,9 @@ def test_a_bar_beside_a_plate_gives_no_seam_and_both_grooves_are_kept():
     for truth in scene.seams:
         along = cKDTree(truth.points_m)
         assert min(np.median(along.query(seam.positions_m)[0]) for seam in state.seams) < 0.0005
-    slots = rejected_centres(state, Rejection.SLOT)
-    assert slots
-    assert all(gap_to_fixtures_m(scene, centre) < 0.01 for centre in slots)  # beside a fixture (the bar)
+    gaps_m = rejected_gaps_to_fixtures_m(scene, state, Rejection.SLOT)
+    assert gaps_m
+    assert all(gap < 0.01 for gap in gaps_m)  # beside a fixture (the bar)
 
 
 @pytest.mark.parametrize("joint", [JointKind.SQUARE_BUTT, JointKind.V_GROOVE])
