@@ -14,7 +14,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from weldseam.geometry import unit
-from weldseam.pipeline.joints.robust import fraction, line, mean, noise, parabola, parabola_at, quantile
+from weldseam.pipeline.joints.robust import (
+    fraction, least_squares_3, line, mean, noise, parabola, parabola_at, quantile,
+)
 
 # A break leaves at least this many points on each side.
 MIN_FACE_POINTS = 5
@@ -121,10 +123,7 @@ def fit_face(u: np.ndarray, w: np.ndarray, origin: tuple[float, float], side: fl
     count = np.count_nonzero(inliers)
     if fraction(inliers) < INLIER_FRACTION or count < MIN_FACE_POINTS:
         return None
-    intercept, slope = line(t[inliers], w[inliers])
-    line_error = float(np.sum((w[inliers] - intercept - slope * t[inliers]) ** 2))
-    curve_error = float(np.sum((w[inliers] - parabola_at(parabola(t[inliers], w[inliers]), t[inliers])) ** 2))
-    if (line_error - curve_error) * (count - 3) <= CURVED_F * max(curve_error, 1e-18):
+    if not curved(t[inliers], w[inliers])[0]:
         return _straight_face(t, w, origin_u, side)
     near = inliers & (np.hypot(t, w - origin_w) <= CURVED_REACH_M)
     if np.count_nonzero(near) < MIN_FACE_POINTS:
@@ -165,17 +164,16 @@ def _circle(u: np.ndarray, w: np.ndarray, iterations: int = 4) -> tuple[float, f
     """(centre u, centre w, radius) of the circle nearest the points: the algebraic circle
     u^2 + w^2 + D u + E w + F = 0 (Kasa; its radius is short on a short noisy arc), then Gauss-Newton
     steps on the geometric distances; None where the points lie on a line."""
-    design = np.column_stack([u, w, np.ones_like(u)])
-    d, e, f = np.linalg.lstsq(design, -(u * u + w * w), rcond=None)[0]
+    ones = np.ones_like(u)
+    d, e, f = least_squares_3((u, w, ones), -(u * u + w * w))
     centre = np.array([-d / 2, -e / 2])
     radius = np.sqrt(max(centre @ centre - f, 0.0))
     for _ in range(iterations):
-        offsets = np.column_stack([u, w]) - centre
-        reach = np.hypot(offsets[:, 0], offsets[:, 1])
+        offset_u, offset_w = u - centre[0], w - centre[1]
+        reach = np.hypot(offset_u, offset_w)
         if not np.all(reach > 0):
             return None
-        jacobian = np.column_stack([-offsets / reach[:, None], -np.ones_like(reach)])
-        step = np.linalg.lstsq(jacobian, -(reach - radius), rcond=None)[0]
+        step = least_squares_3((-offset_u / reach, -offset_w / reach, -ones), radius - reach)
         centre, radius = centre + step[:2], radius + step[2]
     return (float(centre[0]), float(centre[1]), float(abs(radius))) if np.isfinite(radius) else None
 
@@ -241,13 +239,21 @@ def _line_error(sums: np.ndarray) -> np.ndarray:
 def _bends_away(u: np.ndarray, w: np.ndarray) -> bool:
     """Whether points (u, w) bend significantly away from the open side (w up): a parabola's w''
     below zero, explaining them CURVED_F better than a line."""
+    significant, curve = curved(u, w)
+    return bool(significant and curve[2] < 0)
+
+
+def curved(u: np.ndarray, w: np.ndarray) -> tuple[bool, np.ndarray]:
+    """Whether a parabola explains points (u, w) significantly better than a line, F =
+    (SSE_line - SSE_parabola) / (SSE_parabola / (n - 3)) over CURVED_F, and the parabola's
+    (c0, c1, c2) in u - mean(u)."""
     intercept, slope = line(u, w)
-    line_error = float(np.sum((w - intercept - slope * u) ** 2))
+    off_line = w - intercept - slope * u
     centred = u - mean(u)
     curve = parabola(centred, w)
-    curve_error = float(np.sum((w - parabola_at(curve, centred)) ** 2))
-    significant = (line_error - curve_error) * (len(u) - 3) > CURVED_F * max(curve_error, 1e-18)
-    return bool(significant and curve[2] < 0)
+    off_curve = w - parabola_at(curve, centred)
+    line_error, curve_error = float(off_line @ off_line), float(off_curve @ off_curve)
+    return (line_error - curve_error) * (len(u) - 3) > CURVED_F * max(curve_error, 1e-18), curve
 
 
 def meeting_point(left: Face, right: Face, start_u: float, iterations: int = 6) -> float | None:

@@ -18,13 +18,31 @@ def line(u: np.ndarray, w: np.ndarray) -> tuple[float, float]:
 
 
 def parabola(s: np.ndarray, n: np.ndarray) -> np.ndarray:
-    """(c0, c1, c2) of the least-squares parabola n = c0 + c1 s + c2 s^2."""
+    """(c0, c1, c2) of the least-squares parabola n = c0 + c1 s + c2 s^2 (s scaled to [-1, 1]
+    for the normal equations)."""
     scale = max(float(np.abs(s).max()), 1e-9)
     x = s / scale
-    design = np.empty((len(x), 3))
-    design[:, 0], design[:, 1], design[:, 2] = 1.0, x, x * x
-    solution = np.linalg.lstsq(design, n, rcond=None)[0]
+    square = x * x
+    solution = least_squares_3((np.ones_like(x), x, square), n)
     return solution / np.array([1.0, scale, scale * scale])
+
+
+def least_squares_3(columns: tuple[np.ndarray, np.ndarray, np.ndarray], target: np.ndarray) -> np.ndarray:
+    """The coefficients k (3,) minimising |k0 a + k1 b + k2 c - target|^2 for `columns` (a, b, c):
+    the normal equations G k = r (G_ij = col_i . col_j, r_i = col_i . target) solved by Cramer's
+    rule, as np.linalg.lstsq solves them at several times the cost on a few hundred rows; lstsq's
+    minimum-norm solution where G is singular (relative determinant under 1e-12)."""
+    a, b, c = columns
+    gaa, gab, gac, gbb, gbc, gcc = float(a @ a), float(a @ b), float(a @ c), float(b @ b), float(b @ c), float(c @ c)
+    ra, rb, rc = float(a @ target), float(b @ target), float(c @ target)
+    minor_a, minor_b, minor_c = gbb * gcc - gbc * gbc, gab * gcc - gbc * gac, gab * gbc - gbb * gac
+    det = gaa * minor_a - gab * minor_b + gac * minor_c
+    if not abs(det) > 1e-12 * gaa * gbb * gcc:
+        return np.linalg.lstsq(np.column_stack(columns), target, rcond=None)[0]
+    k0 = ra * minor_a - gab * (rb * gcc - gbc * rc) + gac * (rb * gbc - gbb * rc)
+    k1 = gaa * (rb * gcc - gbc * rc) - ra * minor_b + gac * (gab * rc - rb * gac)
+    k2 = gaa * (gbb * rc - rb * gbc) - gab * (gab * rc - rb * gac) + ra * minor_c
+    return np.array([k0, k1, k2]) / det
 
 
 def parabola_at(coefficients: np.ndarray, s: np.ndarray) -> np.ndarray:
