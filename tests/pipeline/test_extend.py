@@ -429,3 +429,25 @@ def test_a_seam_seen_with_one_face_all_along_is_not_extended_by_corners_placed_f
     extension = Extension(None, JointKind.FILLET, replace(ExtendConfig(), max_extension_m=0.05))
     steps, _ = extend.extend_end(extension, seam.positions_m, seam.torch_axes, flags)
     assert steps == []
+
+
+@pytest.mark.parametrize("radius_m", [0.035, 0.06])
+def test_an_end_on_a_tight_curve_is_also_sought_along_its_curve_and_a_straight_one_is_not(radius_m):
+    """Past failed sections a seam is sought up to max_skip_m ahead. Straight on from an end on a
+    ring of 35-60 mm, 12 mm ahead is 1.2-2.1 mm off the ring and a section there cuts it 11-20
+    degrees askew; along the end's curve it is on the ring. A straight end has no curve to add."""
+    params = ExtendConfig()
+    angles = np.arange(0.0, 0.04 / radius_m, params.step_m / radius_m)
+    ring = radius_m * np.column_stack([np.cos(angles), np.sin(angles), np.zeros(len(angles))])
+    along = np.arange(0.0, 0.04, params.step_m)
+    straight = np.column_stack([along, np.zeros(len(along)), np.zeros(len(along))])
+    for points, curved in ((ring, True), (straight, False)):
+        down = [np.array([0.0, 0.0, -1.0])] * len(points)
+        end = extend.SeamEnd(list(points), down, [False] * len(points), *end_curve(points), params.step_m,
+                             params.max_skip_m)
+        aims = end.aims(seam_line(points))
+        assert len(aims) == (2 if curved else 1)
+        ahead = [extend.ahead(points[-1], direction, bend, params.max_skip_m)[0] for direction, bend in aims]
+        off_ring = [abs(np.hypot(*point[:2]) - radius_m) for point in ahead]
+        if curved:
+            assert off_ring[0] > 0.0011 and off_ring[1] < min(0.0006, off_ring[0] / 3)

@@ -163,7 +163,8 @@ def _extended(seam: TracedSeam, start: list[Step], start_stop, end: list[Step], 
 class SeamEnd:
     """An end being extended: its points, torch axes and which were bridged (travel order, the
     end last), where its current face begins (after a turn over an edge), the curve it is
-    predicted along, the groove templates of its fits (a groove only), the curve at its last
+    predicted along, the step and the longest skip over failed sections (m), the groove
+    templates of its fits (a groove only), the curve at its last
     fit with both faces seen: (index, direction, bend), and the across_spread of its last fit
     (JointGeometry; at first the seam's)."""
 
@@ -173,6 +174,7 @@ class SeamEnd:
     direction: np.ndarray
     bend: np.ndarray
     step_m: float
+    skip_m: float
     templates: list = field(default_factory=list)
     face_start: int = 0
     last_full: tuple = ()
@@ -217,11 +219,17 @@ class SeamEnd:
         (its last fit's across_spread over 1) where the straight `line` through this face's fitted
         points (ends.seam_line) points more than LINE_AIM_DEG from it, that line: such a corner's
         fits scatter a few mm across in a sensor's ripple, and the curve through the last of them
-        follows that scatter."""
+        follows that scatter. Right after a fit the heading runs straight on; where the end's curve
+        leaves that line by more than half a step within skip_m (a ring of under ~70 mm), also the
+        curve: past a stretch of failed sections the straight line misses a tight ring sideways,
+        and its sections cut the seam askew."""
         heading = self.heading()
-        if self.spread <= 1.0 or line is None or line.direction @ heading[0] >= np.cos(np.radians(LINE_AIM_DEG)):
-            return [heading]
-        return [heading, (line.direction, np.zeros(3))]
+        aims = [heading]
+        if self.spread > 1.0 and line is not None and line.direction @ heading[0] < np.cos(np.radians(LINE_AIM_DEG)):
+            aims.append((line.direction, np.zeros(3)))
+        if not heading[1].any() and 0.5 * self.skip_m**2 * np.linalg.norm(self.bend) > 0.5 * self.step_m:
+            aims.append((self.direction, self.bend))
+        return aims
 
     def template(self) -> GrooveTemplate | None:
         """Per side, and for the half-opening and the bottom, the median of the latest
@@ -269,7 +277,7 @@ def extend_end(
     elsewhere = positions[arc < arc[-1] - 2 * END_BASELINE_M]
     elsewhere_tree = cKDTree(elsewhere) if len(elsewhere) else None
     end = SeamEnd(list(seam_positions), list(seam_axes), [False] * len(positions), *end_curve(positions), params.step_m,
-                  templates=_end_templates(extension, positions, np.array(seam_axes)),
+                  params.max_skip_m, templates=_end_templates(extension, positions, np.array(seam_axes)),
                   last_full=_last_full(positions, seam_flags), spread=spread)  # fmt: skip
     steps: list[Step] = []
     for _ in range(int(params.max_extension_m / params.step_m)):
