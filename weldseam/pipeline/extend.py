@@ -9,10 +9,12 @@ re-aimed by them:
    curve or near the seam's straight line over its last stretch (the curve of a drifting end
    turns off the seam; seek.next_fit), sought along the curve and, at a shallow corner whose fits
    scatter across, along that line;
-2. a turn over a 90-degree edge (a groove over a block's edge, a seam up a wall: turn.py);
-3. a tack weld over the seam just ahead, crossed on the seam line (tacks.py);
-4. the part's end: where the scan sees past the part just ahead, the seam stops there;
-5. a hole in the scan over the whole seam, crossed and interpolated (holes.py).
+2. at an inside corner, the next corner whose one face is no longer seen, that face carried on
+   from the sections where both were (carried.py);
+3. a turn over a 90-degree edge (a groove over a block's edge, a seam up a wall: turn.py);
+4. a tack weld over the seam just ahead, crossed on the seam line (tacks.py);
+5. the part's end: where the scan sees past the part just ahead, the seam stops there;
+6. a hole in the scan over the whole seam, crossed and interpolated (holes.py).
 
 When none finds the seam, the end stops. An extension stops where it comes within two steps of
 the seam itself (it has gone round a loop; the ends then meet and the seam closes). Run on joined
@@ -29,6 +31,7 @@ from scipy.spatial import cKDTree
 from weldseam.config import ExtendConfig
 from weldseam.geometry import arc_lengths, bend_corner, polyline_length, unit
 from weldseam.pipeline.bridge import GrooveTemplate, groove_template, part_ends_ahead
+from weldseam.pipeline.carried import CornerTemplate, corner_template
 from weldseam.pipeline.ends import END_BASELINE_M, TANGENT_BASELINE_M, SeamLine, ahead, end_curve, offsets, seam_line
 from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.parallel import map_shared
@@ -50,6 +53,9 @@ ONE_FACE_DRIFT = 0.08
 # Where the line through a shallow corner's fitted end points and its curve's tangent differ by
 # more than this, the next fit is also sought along the line (SeamEnd.aims).
 LINE_AIM_DEG = 5.0
+# A corner's faces are carried on from this many sections over the last TANGENT_BASELINE_M of
+# arc up to its last fit with both faces seen (SeamEnd.corner).
+CORNER_FITS = 8
 
 
 @dataclass(frozen=True)
@@ -179,6 +185,7 @@ class SeamEnd:
     face_start: int = 0
     last_full: tuple = ()
     spread: float = 1.0
+    corners: dict = field(default_factory=dict)
 
     @property
     def fitted(self) -> np.ndarray:
@@ -242,6 +249,24 @@ class SeamEnd:
             values.append(float(np.median(measured)) if len(measured) >= max(2, len(recent) / 2) else None)
         return GrooveTemplate(*values) if any(v is not None for v in values) else None
 
+    def corner(self, extension: Extension) -> CornerTemplate | None:
+        """The rulings of a corner's faces (carried.corner_template) from CORNER_FITS sections over
+        the last TANGENT_BASELINE_M of arc up to the last fit with both faces seen, fitted again
+        once per such fit; None for another joint or without such a fit."""
+        if extension.joint != JointKind.FILLET or not self.last_full:
+            return None
+        index = self.last_full[0]
+        if index not in self.corners:
+            positions, axes = np.array(self.positions[: index + 1]), np.array(self.axes[: index + 1])
+            arc = arc_lengths(positions)
+            window = arc >= arc[-1] - TANGENT_BASELINE_M
+            travel, frame_axes, lateral = section_frames(positions[window], axes[window], closed=False)
+            at = np.unique(np.linspace(0, len(travel) - 1, CORNER_FITS).round().astype(int))
+            fits = extension.surface.fit_many(positions[window][at], travel[at], frame_axes[at], lateral[at],
+                                              {JointKind.FILLET})  # fmt: skip
+            self.corners[index] = corner_template(fits, travel[at])
+        return self.corners[index]
+
     def add(self, step: Step, extension: Extension) -> None:
         """Take a step's fits, and re-aim along this face by its fitted sections (one step alone
         is ~10 degrees noisy; a bridged point leans on one edge, and aiming by it would turn a
@@ -302,13 +327,25 @@ def _last_full(positions: np.ndarray, flags: np.ndarray | None) -> tuple:
 
 
 def _next_step(extension: Extension, end: SeamEnd) -> Step | None:
-    """The next fit ahead along the predicted curve (seek.next_fit, bridged over dropouts); a
-    corner with one face unseen only near the curve of the last fit with both faces seen
+    """The next fit ahead along the predicted curve (seek.next_fit, bridged over dropouts)."""
+    return _seek_step(extension, end, end.template())
+
+
+def _carried_step(extension: Extension, end: SeamEnd) -> Step | None:
+    """The next corner ahead with one face unseen, that face carried on from the fits with both
+    faces seen (carried.py: SeamEnd.corner)."""
+    corner = end.corner(extension)
+    return None if corner is None else _seek_step(extension, end, corner)
+
+
+def _seek_step(extension: Extension, end: SeamEnd, template: GrooveTemplate | CornerTemplate | None) -> Step | None:
+    """The next fit ahead along each of the end's aims (seek.next_fit with `template`); a corner
+    with one face unseen only near the curve of the last fit with both faces seen
     (SeamEnd.admits): past a pipe's silhouette the end of the plate seen is a shadow's edge,
     running off the pipe's foot along the line of sight."""
     line = seam_line(end.fitted)
     for heading in end.aims(line):
-        fit = next_fit(extension, end.positions[-1], end.axes[-1], heading, end.template(), line)
+        fit = next_fit(extension, end.positions[-1], end.axes[-1], heading, template, line)
         if fit is not None and end.admits(fit):
             return Step([fit])
     return None
@@ -359,7 +396,7 @@ def _hole_step(extension: Extension, end: SeamEnd) -> Step | None:
     return None if fits is None else Step(fits, hole=hole_of(end.positions[-1], fits))
 
 
-STRATEGIES = (_next_step, _turn_step, _tack_step, _part_end_step, _hole_step)
+STRATEGIES = (_next_step, _carried_step, _turn_step, _tack_step, _part_end_step, _hole_step)
 
 
 def _arc_since_fit(positions: list[np.ndarray], bridged: list[bool]) -> float:

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 from weldseam.config import ExtendConfig
 from weldseam.pipeline.bridge import GrooveTemplate, fit_or_bridge
+from weldseam.pipeline.carried import CornerTemplate, carried_fit
 from weldseam.pipeline.ends import SeamLine, ahead, offsets
 from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.section import FineSurface, SectionFit
@@ -20,12 +21,13 @@ class Extension:
     params: ExtendConfig
 
 
-def next_fit(extension: Extension, last_point, last_axis, heading, template: GrooveTemplate | None = None,
-             line: SeamLine | None = None):
+def next_fit(extension: Extension, last_point, last_axis, heading,
+             template: GrooveTemplate | CornerTemplate | None = None, line: SeamLine | None = None):
     """The next fit along the curve predicted from the end (ends.ahead of `heading`: (direction,
     bend)), stepping over failed sections up to max_skip_m, or None. Where a section fails and
     the groove's template is known, it is bridged (a dropout over part of the groove:
-    bridge.fit_or_bridge).
+    bridge.fit_or_bridge); with a corner's template, each section is fitted as a corner with one
+    face carried on from the template alone (carried.carried_fit).
 
     A fit counts when it lies within max(1.5 steps, 15 % of the distance from the last fit) of the
     prediction sideways (the fit is a verified joint profile and the better estimate: near an end
@@ -60,11 +62,14 @@ def next_fit(extension: Extension, last_point, last_axis, heading, template: Gro
     return None
 
 
-def section_at(extension: Extension, predicted, travel, axis, template: GrooveTemplate | None = None):
+def section_at(extension: Extension, predicted, travel, axis, template: GrooveTemplate | CornerTemplate | None = None):
     """(fit, depth, sideways) of the section at `predicted` seeking the extension's joint (bridged
-    with a template where it does not fit); depth and sideways are the fit's offsets (m) from the
-    prediction along and across the axis."""
-    fit = fit_or_bridge(extension.surface, predicted, travel, axis, template, {extension.joint})
+    with a groove's template where it does not fit; with a corner's, the corner carried on);
+    depth and sideways are the fit's offsets (m) from the prediction along and across the axis."""
+    if isinstance(template, CornerTemplate):
+        fit = carried_fit(extension.surface, predicted, travel, axis, template)
+    else:
+        fit = fit_or_bridge(extension.surface, predicted, travel, axis, template, {extension.joint})
     return fit, *offsets(fit.point_m, predicted, travel, axis)
 
 
