@@ -122,6 +122,7 @@ def test_a_shallow_corners_points_may_scatter_farther_across_than_a_square_ones(
     assert consistent(positions, axes, 0.0015 * shallow, 8.0)[7]
     assert abs(shallow - 1 / np.tan(np.radians(20.0))) < 1e-9 and square == 1.0
     assert JointGeometry(opening_m=0.012, included_deg=120.0).across_spread == 1.0, "a groove's point is between edges"
+    assert JointGeometry(included_deg=140.0, faces_seen=1).across_spread == 1.0, "one face's end places the corner"
 
 
 def test_a_seam_is_sampled_evenly_from_its_first_point_to_its_last():

@@ -47,8 +47,9 @@ class JointGeometry:
         faces' slope from the lateral (a face raised by d moves the corner d / 2 tan a across and
         d / 2 in depth); 1 without a measured angle. A 130-degree valley's corner is known 2.1 times
         less well across than its faces are in depth, a 150-degree one's 3.7 times. 1 for a groove:
-        its point is its opening's middle, between two edges, not where its walls meet."""
-        if self.included_deg is None or self.included_deg <= 90.0 or self.opening_m:
+        its point is its opening's middle, between two edges, not where its walls meet; and for a
+        corner with one face unseen: its point is where the seen face ends."""
+        if self.included_deg is None or self.included_deg <= 90.0 or self.opening_m or self.faces_seen == 1:
             return 1.0
         return 1.0 / float(np.tan(np.radians(180.0 - self.included_deg) / 2))
 
