@@ -7,7 +7,7 @@ from tests.pipeline.test_section import surface_of
 from weldseam.config import ExtendConfig
 from weldseam.geometry import polyline_length
 from weldseam.pipeline.ends import end_curve, seam_line
-from weldseam.pipeline import extend
+from weldseam.pipeline import ends, extend
 from weldseam.pipeline.extend import extend_seam, extend_seams
 from weldseam.pipeline.holes import HOLE_EDGE_M, hole_aim
 from weldseam.pipeline.parallel import worker_process
@@ -447,7 +447,7 @@ def test_an_end_on_a_tight_curve_is_also_sought_along_its_curve_and_a_straight_o
                              params.max_skip_m)
         aims = end.aims(seam_line(points))
         assert len(aims) == (2 if curved else 1)
-        ahead = [extend.ahead(points[-1], direction, bend, params.max_skip_m)[0] for direction, bend in aims]
+        ahead = [ends.ahead(points[-1], direction, bend, params.max_skip_m)[0] for direction, bend in aims]
         off_ring = [abs(np.hypot(*point[:2]) - radius_m) for point in ahead]
         if curved:
             assert off_ring[0] > 0.0011 and off_ring[1] < min(0.0006, off_ring[0] / 3)

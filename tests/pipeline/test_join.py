@@ -4,6 +4,7 @@ import numpy as np
 
 from weldseam.pipeline.join import join_pieces, trim_overlaps
 from weldseam.pipeline.joints import JointKind
+from weldseam.pipeline.section import PointFlag
 from weldseam.pipeline.trace import TracedSeam
 
 DOWN = np.array([0.0, 0.0, -1.0])
@@ -113,3 +114,23 @@ def test_a_v_groove_and_a_bevel_piece_end_to_end_are_one_groove_of_the_longer_ki
     assert seam.joint == JointKind.V_GROOVE and np.isclose(np.ptp(seam.positions_m[:, 0]), 0.15)
     fillet = piece(line([0.1, 0, 0], [0.15, 0, 0]), JointKind.FILLET)
     assert len(join([groove, fillet])) == 2  # a different joint stays apart
+
+
+def test_corners_with_one_face_unseen_go_on_from_a_ring_only_along_it():
+    """Past a standing pipe's silhouette the edge of its shadow passes for a corner whose wall is
+    unseen, and runs straight off the ring along the line of sight: such a piece joins the ring's
+    full fits only where it follows their curve."""
+    radius = 0.047
+    angles = np.arange(0.0, 1.2, 0.002 / radius)
+    ring = radius * np.column_stack([np.cos(angles), np.sin(angles), np.zeros(len(angles))])
+    full = piece(ring, JointKind.FILLET)
+    one_face = np.full(12, int(PointFlag.ONE_FACE), np.uint8)
+    on_ring = radius * np.column_stack([np.cos(a := 1.2 + 0.006 / radius + np.arange(12) * 0.002 / radius),
+                                        np.sin(a), np.zeros(12)])  # fmt: skip
+    tangent = np.array([-np.sin(1.2), np.cos(1.2), 0.0])
+    off_ring = ring[-1] + np.outer(0.006 + np.arange(12) * 0.002, tangent)
+    for points, joins in ((on_ring, True), (off_ring, False)):
+        after = replace(piece(points, JointKind.FILLET), flags=one_face)
+        seams = join([full, after])
+        assert (len(seams) == 1) == joins
+    assert np.abs(np.hypot(*off_ring[-1, :2]) - radius) > 0.003, "the straight piece ends well off the ring"

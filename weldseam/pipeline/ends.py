@@ -1,5 +1,6 @@
-"""Where a seam line goes at its ends: the outward direction, the tangent and curvature, and the
-seam predicted ahead along that curve."""
+"""Where a seam line goes at its ends: the outward direction, the tangent and curvature, the
+seam predicted ahead along that curve, and whether a corner with one face unseen lies on the
+curve at the last fit with both faces seen (extend, join)."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from weldseam.geometry import arc_lengths, unit
+from weldseam.pipeline.section import PointFlag
 
 # The stretch of seam an end's direction is taken over (the last few points alone are too noisy).
 END_BASELINE_M = 0.012
@@ -15,6 +17,14 @@ END_BASELINE_M = 0.012
 TANGENT_BASELINE_M = 0.032
 # The tightest bend an end's curve predicts (the curvature of a noisy end is clamped to it).
 MIN_BEND_RADIUS_M = 0.03
+# A corner fitted with one face unseen lies at most this share of its arc from the last fit with
+# both faces seen off the curve fitted there, or CURVE_FLOOR_M. Past a standing pipe's silhouette
+# the plate's visible end (the shadow's edge) runs on along the line of sight, straight: it
+# leaves a ring of radius R by d^2 / 2R, 12.5 % of d at d = R / 4. The curve (a parabola, its
+# bend clamped at MIN_BEND_RADIUS_M) stays within 8 % of d of a 50 mm ring for 34 mm, and of a
+# 25 mm ring. Near the anchor, within CURVE_FLOOR_M (half an extension step): the curve's noise.
+ONE_FACE_DRIFT = 0.08
+CURVE_FLOOR_M = 0.001
 
 
 def end_direction(points: np.ndarray, at_start: bool) -> np.ndarray:
@@ -97,3 +107,22 @@ def seam_line(points: np.ndarray) -> SeamLine | None:
     centre = window.mean(axis=0)
     direction = np.linalg.svd(window - centre, full_matrices=False)[2][0]
     return SeamLine(centre, direction if direction @ (window[0] - window[-1]) >= 0 else -direction)
+
+
+def on_curve(anchor, direction, bend, arc_m: float, point, axis) -> bool:
+    """Whether `point` (3,), `arc_m` on along a seam from `anchor` (3,), lies within
+    max(CURVE_FLOOR_M, ONE_FACE_DRIFT x arc) of the curve there (end_curve's `direction` and
+    `bend` at the anchor: ahead), sideways of the torch `axis`."""
+    predicted, travel = ahead(anchor, direction, bend, arc_m)
+    _, sideways = offsets(point, predicted, travel, axis)
+    return sideways <= max(CURVE_FLOOR_M, ONE_FACE_DRIFT * arc_m)
+
+
+def last_full(positions: np.ndarray, flags: np.ndarray | None) -> tuple:
+    """(index, direction, bend) of a seam's last point fitted with both faces seen (`flags`: its
+    points' PointFlag bits, None: all were) and the curve of the seam up to it (end_curve); ()
+    when there is none (a T-joint seen from above all along: its one-face corners are the seam)."""
+    full = np.arange(len(positions)) if flags is None else np.flatnonzero((np.asarray(flags) & PointFlag.ONE_FACE) == 0)
+    if len(full) == 0 or full[-1] < 1:
+        return ()
+    return (int(full[-1]), *end_curve(positions[: full[-1] + 1]))

@@ -32,7 +32,9 @@ from weldseam.config import ExtendConfig
 from weldseam.geometry import arc_lengths, bend_corner, polyline_length, unit
 from weldseam.pipeline.bridge import GrooveTemplate, groove_template, part_ends_ahead
 from weldseam.pipeline.carried import CornerTemplate, corner_template
-from weldseam.pipeline.ends import END_BASELINE_M, TANGENT_BASELINE_M, SeamLine, ahead, end_curve, offsets, seam_line
+from weldseam.pipeline.ends import (
+    END_BASELINE_M, TANGENT_BASELINE_M, SeamLine, end_curve, last_full, on_curve, seam_line,
+)
 from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.parallel import map_shared
 from weldseam.pipeline.section import FineSurface, PointFlag, SectionFit, section_frames
@@ -44,12 +46,6 @@ from weldseam.pipeline.trace import Hole, TracedSeam
 
 # The groove template a bridged section assumes: the median of this many latest fits.
 TEMPLATE_MEMORY = 6
-# A corner fitted with one face unseen lies at most this share of its arc from the last fit with
-# both faces seen off the curve fitted there. Past a standing pipe's silhouette the plate's
-# visible end (the shadow's edge) runs on along the line of sight, straight: it leaves a ring of
-# radius R by d^2 / 2R, 12.5 % of d at d = R / 4. The curve (a parabola, its bend clamped at 30 mm:
-# ends.MIN_BEND_RADIUS_M) stays within 8 % of d of a 50 mm ring for 34 mm, and of a 25 mm ring.
-ONE_FACE_DRIFT = 0.08
 # Where the line through a shallow corner's fitted end points and its curve's tangent differ by
 # more than this, the next fit is also sought along the line (SeamEnd.aims).
 LINE_AIM_DEG = 5.0
@@ -204,15 +200,11 @@ class SeamEnd:
         return self.on_curve(fit.point_m)
 
     def on_curve(self, point: np.ndarray) -> bool:
-        """Whether `point` (3,), reached from the last point, lies within max(half a step,
-        ONE_FACE_DRIFT x its arc) of the curve at the last fit with both faces seen (last_full),
-        sideways of the torch axis."""
+        """Whether `point` (3,), reached from the last point, lies near the curve at the last fit
+        with both faces seen (last_full; ends.on_curve), sideways of the torch axis."""
         index, direction, bend = self.last_full
-        anchor = np.asarray(self.positions[index])
         arc = polyline_length(np.array(self.positions[index:])) + float(np.linalg.norm(point - self.positions[-1]))
-        predicted, travel = ahead(anchor, direction, bend, arc)
-        _, sideways = offsets(point, predicted, travel, self.axes[-1])
-        return sideways <= max(0.5 * self.step_m, ONE_FACE_DRIFT * arc)
+        return on_curve(np.asarray(self.positions[index]), direction, bend, arc, point, self.axes[-1])
 
     def heading(self) -> tuple[np.ndarray, np.ndarray]:
         """(direction, bend) to predict the next step along: past bridged points along the curve
@@ -303,7 +295,7 @@ def extend_end(
     elsewhere_tree = cKDTree(elsewhere) if len(elsewhere) else None
     end = SeamEnd(list(seam_positions), list(seam_axes), [False] * len(positions), *end_curve(positions), params.step_m,
                   params.max_skip_m, templates=_end_templates(extension, positions, np.array(seam_axes)),
-                  last_full=_last_full(positions, seam_flags), spread=spread)  # fmt: skip
+                  last_full=last_full(positions, seam_flags), spread=spread)  # fmt: skip
     steps: list[Step] = []
     for _ in range(int(params.max_extension_m / params.step_m)):
         step = next((found for strategy in STRATEGIES if (found := strategy(extension, end)) is not None), STOP)
@@ -314,16 +306,6 @@ def extend_end(
         steps.append(step)
         end.add(step, extension)
     return steps, None
-
-
-def _last_full(positions: np.ndarray, flags: np.ndarray | None) -> tuple:
-    """(index, direction, bend) of a seam's last point fitted with both faces seen (`flags`: its
-    points' PointFlag bits, None: all were) and the curve of the seam up to it; () when there is
-    none (a T-joint seen from above all along: its one-face corners are the seam)."""
-    full = np.arange(len(positions)) if flags is None else np.flatnonzero((np.asarray(flags) & PointFlag.ONE_FACE) == 0)
-    if len(full) == 0 or full[-1] < 1:
-        return ()
-    return (int(full[-1]), *end_curve(positions[: full[-1] + 1]))
 
 
 def _next_step(extension: Extension, end: SeamEnd) -> Step | None:

@@ -3,7 +3,8 @@
 Several chains often trace the same seam, each a little further than the others, and a seam often
 comes out in pieces (holes in the scan, junctions in the candidate band). Longest first, each
 stretch of seam is kept once; open pieces whose ends face each other are joined (never three ends
-meeting at a junction); a piece whose own ends meet is a closed loop.
+meeting at a junction; a piece resting only on corners with one face unseen only along the curve
+of the other's full fits); a piece whose own ends meet is a closed loop.
 """
 
 from __future__ import annotations
@@ -15,8 +16,9 @@ from scipy.spatial import cKDTree
 
 from weldseam.config import JoinConfig
 from weldseam.geometry import bend_corner, corner_before, polyline_length, unit
-from weldseam.pipeline.ends import END_BASELINE_M, end_direction
+from weldseam.pipeline.ends import END_BASELINE_M, end_direction, last_full, on_curve
 from weldseam.pipeline.joints import one_joint
+from weldseam.pipeline.section import PointFlag
 from weldseam.pipeline.trace import TracedSeam, end_to_end
 
 
@@ -157,13 +159,34 @@ def _joined(
             else:
                 reference = unit(out_a - out_b)
             along = distance < 1e-3 or unit(gap) @ reference >= cos_along
-            if not (facing and along) or _junction((a[-1] + b[0]) / 2, others, join_m):
+            if not (facing and along) or _junction((a[-1] + b[0]) / 2, others, join_m) \
+                    or not _one_face_follows(first_way, second_way):
                 continue
             corner = _corner(a, out_a, b, out_b, join_m)
             between = (np.empty((0, 3)), np.empty((0, 3)), np.empty(0, np.uint8)) if corner is None else \
                 (corner[None], unit(first_way.torch_axes[-1] + second_way.torch_axes[0])[None], np.zeros(1, np.uint8))
             best = (distance, end_to_end(first_way, between, second_way))
     return best
+
+
+def _one_face_follows(a: TracedSeam, b: TracedSeam) -> bool:
+    """Whether b may go on from a's end as far as corners with one face unseen go: a piece all
+    of whose points rest on such corners goes on from a piece with fits of both faces only along
+    the curve at its last such fit (ends.on_curve), as an extension's corners do. Past a standing
+    pipe's silhouette the edge of its shadow passes for such a corner, and runs straight off the
+    ring along the line of sight."""
+    for measured, inferred in ((a, b), (b.reversed(), a.reversed())):
+        full = last_full(measured.positions_m, measured.point_flags)
+        if not full or np.any((inferred.point_flags & PointFlag.ONE_FACE) == 0):
+            continue
+        index, direction, bend = full
+        start = polyline_length(measured.positions_m[index:])
+        steps = np.linalg.norm(np.diff(np.vstack([measured.positions_m[-1:], inferred.positions_m]), axis=0), axis=1)
+        axis = measured.torch_axes[-1]
+        if not all(on_curve(measured.positions_m[index], direction, bend, start + arc, point, axis)
+                   for arc, point in zip(np.cumsum(steps), inferred.positions_m)):  # fmt: skip
+            return False
+    return True
 
 
 def _corner(a: np.ndarray, out_a: np.ndarray, b: np.ndarray, out_b: np.ndarray, join_m: float):
