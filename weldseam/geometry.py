@@ -69,6 +69,12 @@ def arc_lengths(points: np.ndarray, closed: bool = False) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
 
 
+def even_indices(length: int, count: int) -> np.ndarray:
+    """Indices of up to `count` of `length` items, evenly spaced from the first to the last (each
+    once; every index when `count` >= `length`)."""
+    return np.unique(np.linspace(0, length - 1, min(count, length)).round().astype(int))
+
+
 def polyline_length(points: np.ndarray, closed: bool = False) -> float:
     """Length (m) of a polyline, including the closing segment of a loop."""
     return float(arc_lengths(points, closed)[-1]) if len(points) else 0.0

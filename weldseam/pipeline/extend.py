@@ -29,7 +29,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from weldseam.config import ExtendConfig
-from weldseam.geometry import arc_lengths, bend_corner, polyline_length, unit
+from weldseam.geometry import arc_lengths, bend_corner, even_indices, polyline_length, unit
 from weldseam.pipeline.bridge import GrooveTemplate, groove_template, part_ends_ahead
 from weldseam.pipeline.carried import CornerTemplate, corner_template
 from weldseam.pipeline.ends import (
@@ -253,7 +253,7 @@ class SeamEnd:
             arc = arc_lengths(positions)
             window = arc >= arc[-1] - TANGENT_BASELINE_M
             travel, frame_axes, lateral = section_frames(positions[window], axes[window], closed=False)
-            at = np.unique(np.linspace(0, len(travel) - 1, CORNER_FITS).round().astype(int))
+            at = even_indices(len(travel), CORNER_FITS)
             fits = extension.surface.fit_many(positions[window][at], travel[at], frame_axes[at], lateral[at],
                                               {JointKind.FILLET})  # fmt: skip
             self.corners[index] = corner_template(fits, travel[at])

@@ -11,7 +11,7 @@ import itertools
 
 import numpy as np
 
-from weldseam.geometry import polyline_length, unit
+from weldseam.geometry import even_indices, polyline_length, unit
 from weldseam.pipeline.order import Chain
 from weldseam.pipeline.section import FineSurface, SectionFit, section_frames
 
@@ -47,7 +47,7 @@ def probe_chains(
             probes.append((np.empty(0, int), None))
             continue
         travel, frame_axes, lateral = section_frames(chain.points, axes, chain.closed)
-        at = np.unique(np.linspace(0, len(chain.points) - 1, PROBE_SECTIONS).round().astype(int))
+        at = even_indices(len(chain.points), PROBE_SECTIONS)
         probes.append((at, (chain.points[at], travel[at], frame_axes[at], lateral[at])))
     framed = [frame for _, frame in probes if frame is not None]
     if not framed:

@@ -15,7 +15,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from weldseam.config import TraceConfig
-from weldseam.geometry import polyline_length, unit
+from weldseam.geometry import even_indices, polyline_length, unit
 from weldseam.pipeline.joints import JointKind, akin, recentred
 from weldseam.pipeline.order import Chain
 from weldseam.pipeline.section import RECENTRE_M, FineSurface, PointFlag, SectionFit, section_frames
@@ -76,8 +76,7 @@ class TracedSeam:
 
     def samples(self, count: int) -> np.ndarray:
         """Indices of up to `count` of its points, evenly spaced from the first to the last."""
-        points = len(self.positions_m)
-        return np.unique(np.linspace(0, points - 1, min(count, points)).round().astype(int))
+        return even_indices(len(self.positions_m), count)
 
     @property
     def length_m(self) -> float:

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from weldseam.geometry import even_indices
 from weldseam.types import WeldPath
 
 DEFAULT_POINT_BUDGET = 60_000
@@ -77,7 +78,7 @@ def torch_arrows(path: WeldPath, count: int = ARROWS_PER_SEAM, length_m: float =
     """Tails and heads (A, 3) of arrows along the torch axis at `count` evenly spaced poses
     (both ends included; every pose when fewer): each arrow ends at the seam point and comes
     from `length_m` back along the axis."""
-    chosen = np.unique(np.linspace(0, len(path.positions_m) - 1, min(count, len(path.positions_m))).round().astype(int))
+    chosen = even_indices(len(path.positions_m), count)
     heads = path.positions_m[chosen]
     return heads - length_m * path.rotations[chosen, :, 2], heads
 
