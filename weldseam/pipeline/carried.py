@@ -31,8 +31,9 @@ import numpy as np
 from weldseam.config import JointsConfig
 from weldseam.geometry import unit
 from weldseam.pipeline.joints import JointGeometry, JointKind, ProfileFit
-from weldseam.pipeline.joints.robust import fraction, line, noise, parabola, parabola_at
-from weldseam.pipeline.one_face import EDGE_ON_COS, FACE_INLIERS, FACE_TOLERANCE_M, GAP_M
+from weldseam.pipeline.joints.faces import line_inliers
+from weldseam.pipeline.joints.robust import line, parabola, parabola_at
+from weldseam.pipeline.one_face import EDGE_ON_COS, GAP_M
 from weldseam.pipeline.section import FineSurface, SectionFit, section_frame
 
 CORNER = JointKind.FILLET
@@ -166,10 +167,8 @@ def _corner(u, w, unseen_side: int, unseen: np.ndarray, toward, params: JointsCo
     nu, nw = u[near], w[near]
     if len(nu) < 8 or reach[near].max() < 0.8 * params.fillet_min_leg_m:
         return None
-    intercept, slope = line(nu, nw)
-    residual = nw - (intercept + slope * nu)
-    inliers = np.abs(residual) <= max(3 * noise(residual), FACE_TOLERANCE_M)
-    if fraction(inliers) < FACE_INLIERS:
+    inliers = line_inliers(nu, nw)
+    if inliers is None:
         return None
     points = np.column_stack([nu[inliers], nw[inliers]])
     intercept, slope = line(nu[inliers], nw[inliers])

@@ -180,15 +180,15 @@ def _circle(u: np.ndarray, w: np.ndarray, iterations: int = 4) -> tuple[float, f
 
 def _straight_face(t, w, origin_u: float, side: float) -> Face | None:
     """A straight face through the points (t = u - origin_u, w): a robust line fitted again to its
-    inliers (_line_inliers)."""
-    inliers = _line_inliers(t, w)
+    inliers (line_inliers)."""
+    inliers = line_inliers(t, w)
     if inliers is None:
         return None
     intercept, slope = line(t[inliers], w[inliers])
     return Face((intercept, slope, 0.0), origin_u, side, t[inliers] + origin_u, False)
 
 
-def _line_inliers(t, w) -> np.ndarray | None:
+def line_inliers(t, w) -> np.ndarray | None:
     """Which points (N,) lie on a robust line through them (the points a corner's rounding or a
     mixed pixel moves off it do not), or None when too few do."""
     intercept, slope = line(t, w)
@@ -218,7 +218,7 @@ def straight_faces(u: np.ndarray, w: np.ndarray) -> tuple[Face, Face, float] | s
     faces = []
     for part, side in ((slice(0, split), -1.0), (slice(split, n), 1.0)):
         pu, pw = u[part], w[part]
-        inliers = _line_inliers(pu, pw)
+        inliers = line_inliers(pu, pw)
         if inliers is None:
             return "a face is not a straight line"
         if _bends_away(pu[inliers], pw[inliers]):
