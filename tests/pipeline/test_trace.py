@@ -97,6 +97,34 @@ def test_corners_placed_from_an_outline_alone_are_no_seam():
     assert trace_chain(chain, axes, {}, OneFaceSurface(int(PointFlag.ONE_FACE | PointFlag.OUTLINE)), TraceConfig()) == []
 
 
+class StretchSurface:
+    """A stand-in FineSurface whose sections fit a V-groove along y = 0 only for x in [start, stop)
+    (m); it counts the sections it fits."""
+
+    def __init__(self, start_m, stop_m):
+        self.start_m, self.stop_m, self.fitted = start_m, stop_m, 0
+
+    def fit_many(self, centres, travel, axes, lateral, kinds=None):
+        self.fitted += len(centres)
+        return [SectionFit(JointKind.V_GROOVE if self.start_m <= centre[0] < self.stop_m else None, centre,
+                           np.array([0.0, 0.0, -1.0])) for centre in centres]
+
+
+def test_a_long_chain_where_few_coarse_sections_fit_is_given_up_before_the_rest_are_fitted():
+    along = np.arange(0.0, 0.2, STEP_M)  # 100 sections
+    chain = Chain(np.column_stack([along, np.zeros_like(along), np.zeros_like(along)]), False)
+    axes = np.tile([0.0, 0.0, -1.0], (len(along), 1))
+    edge = StretchSurface(0.0, 0.02)  # a tenth of it fits
+    assert trace_chain(chain, axes, {}, edge, TraceConfig()) == []
+    assert edge.fitted == 25, "every fourth section only"
+    seam_part = StretchSurface(0.0, 0.13)  # 65 %: a seam, every section fitted
+    (seam,) = trace_chain(chain, axes, {}, seam_part, TraceConfig())
+    assert seam_part.fitted == 100 and len(seam.positions_m) == 65
+    short = Chain(chain.points[:10], False)  # too short to judge from a few sections: all fitted
+    few = StretchSurface(0.0, 0.002)
+    assert trace_chain(short, axes[:10], {}, few, TraceConfig()) == [] and few.fitted == 10
+
+
 def test_a_chain_beside_the_seam_its_sections_find_is_traced_again_on_that_seam():
     along = np.arange(0.0, 0.06, STEP_M)
     beside = Chain(np.column_stack([along, np.full(len(along), 0.004), np.zeros(len(along))]), False)

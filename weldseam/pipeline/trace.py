@@ -27,6 +27,13 @@ INSIDE_FRACTION = 0.8
 # A chain whose sections find the seam this far from it (median) is moved onto what they found
 # (on_fits), each point by the median offset of this many fits around it.
 ON_FITS_WINDOW = 5
+# A chain of this many sections or more is first fitted at every COARSE_STRIDE-th one (with its
+# probes): where fewer than half trace.min_valid_fraction of those fit any joint, the whole
+# chain cannot reach that fraction unless its fits crowd between the samples, and it is not
+# fitted further (most candidates are plate and table edges). A chain lying a few mm off its
+# joint (follow_fits) is no exception: its sections, 2 half_width_m wide, still find the joint.
+COARSE_STRIDE = 4
+MIN_COARSE_SECTIONS = 12
 OUTLINE_REASON = "a corner with one face unseen whose other face is only an occluder's outline (a shadow's edge?)"
 
 
@@ -113,14 +120,25 @@ def trace_chain(
     """Seams found along one chain (none if the chain is not a seam): a section at every chain
     point, seeking the joints its probes found (and their kin, joints.akin). The chain's probes are
     sections at some of its points in the same frames, fitted as these are: they are not fitted
-    again. `follow_fits`: a chain thinned from a band wider than its joint (a wide valley's) may
-    lie a few mm off it; where its sections find the seam off it (on_fits), they are taken again
-    across the line they found."""
+    again. A long chain is fitted coarsely first (COARSE_STRIDE) and given up early where few of
+    those sections fit. `follow_fits`: a chain thinned from a band wider than its joint (a wide
+    valley's) may lie a few mm off it; where its sections find the seam off it (on_fits), they are
+    taken again across the line they found."""
     travel, axes, lateral = section_frames(chain.points, approx_axes, chain.closed)
-    rest = np.array([k for k in range(len(chain.points)) if k not in probe_fits], dtype=int)
     sought = akin({fit.kind for fit in probe_fits.values() if fit.kind is not None}) or None  # none: any
-    fitted = iter(surface.fit_many(chain.points[rest], travel[rest], axes[rest], lateral[rest], sought))
-    fits = evidence([probe_fits[k] if k in probe_fits else next(fitted) for k in range(len(chain.points))])
+    found = dict(probe_fits)
+
+    def fit_at(indices) -> None:
+        at = np.array([k for k in indices if k not in found], dtype=int)
+        found.update(zip(at.tolist(), surface.fit_many(chain.points[at], travel[at], axes[at], lateral[at], sought)))
+
+    count = len(chain.points)
+    fit_at(range(0, count, COARSE_STRIDE))
+    coarse = evidence(list(found.values()))
+    if count >= MIN_COARSE_SECTIONS and _fitting(coarse) < params.min_valid_fraction / 2:
+        return []
+    fit_at(range(count))
+    fits = evidence([found[k] for k in range(count)])
     kinds = Counter(fit.kind for fit in fits if fit.kind is not None)
     if not kinds:
         return []
@@ -160,6 +178,11 @@ def trace_chain(
             )
         )
     return seams
+
+
+def _fitting(fits: list[SectionFit]) -> float:
+    """The fraction of `fits` that fit some joint."""
+    return sum(fit.kind is not None for fit in fits) / len(fits)
 
 
 def evidence(fits: list[SectionFit]) -> list[SectionFit]:
