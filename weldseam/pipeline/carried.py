@@ -30,7 +30,7 @@ import numpy as np
 
 from weldseam.config import JointsConfig
 from weldseam.geometry import unit
-from weldseam.pipeline.joints import JointGeometry, JointKind, ProfileFit
+from weldseam.pipeline.joints import MIN_PROFILE_POINTS, JointGeometry, JointKind, ProfileFit
 from weldseam.pipeline.joints.faces import line_inliers
 from weldseam.pipeline.joints.robust import line, parabola, parabola_at
 from weldseam.pipeline.one_face import EDGE_ON_COS, GAP_M
@@ -140,7 +140,7 @@ def carried_corner(u, w, faces: dict[int, np.ndarray], toward, params: JointsCon
     runs on from it along faces[side] ((u, w) unit direction of the face on that side: -1 left, +1
     right; a side missing is not known), or None; of several, the one nearest the section's
     centre. `toward`: (u, w) unit direction toward the camera."""
-    if len(u) < 12:
+    if len(u) < MIN_PROFILE_POINTS:
         return None
     runs = np.split(np.arange(len(u)), np.flatnonzero(np.diff(u) > GAP_M) + 1)
     found = []

@@ -133,10 +133,10 @@ def trace_chain(
         found.update(zip(at.tolist(), surface.fit_many(chain.points[at], travel[at], axes[at], lateral[at], sought)))
 
     count = len(chain.points)
-    fit_at(range(0, count, COARSE_STRIDE))
-    coarse = evidence(list(found.values()))
-    if count >= MIN_COARSE_SECTIONS and _fitting(coarse) < params.min_valid_fraction / 2:
-        return []
+    if count >= MIN_COARSE_SECTIONS:
+        fit_at(range(0, count, COARSE_STRIDE))
+        if _fitting(evidence(list(found.values()))) < params.min_valid_fraction / 2:
+            return []
     fit_at(range(count))
     fits = evidence([found[k] for k in range(count)])
     kinds = Counter(fit.kind for fit in fits if fit.kind is not None)
