@@ -109,7 +109,8 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
     """The candidates: bands where the descriptor exceeds the automatic threshold (or
     segment.threshold), and, apart from them, the valleys and the ridges where the signed bend
     exceeds its own (a groove's ridge never joins a plate's edge: on a narrow part the descriptor's
-    bands merge). Clusters too short are recorded as rejected."""
+    bands merge). Clusters too short are recorded as rejected. The table under the part (_support)
+    is found here from the unbent points."""
     state.threshold = c.segment.threshold
     if state.threshold is None:
         state.threshold = segment.crease_threshold(c, c.descriptor.variant)
@@ -138,6 +139,14 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
     state.short_candidates = [replace(candidates.cluster_candidate(state.working[members]), rejection=Rejection.TOO_SHORT)
                               for members in short]  # fmt: skip
     state.working_tree = cKDTree(state.working)
+    if c.support.enabled:
+        # Found here, not in _support: after the worker process forks (_probe), the trials'
+        # distance matrix (8 MB) would be written over pages both processes share, each copied
+        # first (40 ms instead of 11).
+        state.support = support.find_support_plane(
+            state.working, state.descriptor <= state.threshold, state.working_camera,
+            tolerance_m=c.support.tolerance_m, below_fraction=c.support.below_fraction,
+        )
     chosen = [*state.clusters, *state.creases, *state.wide_valleys]
     state.dump("segment", state.working[np.concatenate(chosen)] if chosen else np.empty((0, 3)), None)
 
@@ -148,14 +157,10 @@ def _clusters(state: PlanState, c: PlanConfig, selected: np.ndarray):
 
 
 def _support(state: PlanState, c: PlanConfig) -> None:
-    """The table under the part (the largest plane of unbent points that nothing lies beyond), and
-    the traced seams formed with it dropped: there a part rests on the table."""
+    """The traced seams formed with the table under the part (the largest plane of unbent points
+    that nothing lies beyond, found by _segment) dropped: there a part rests on the table."""
     if not c.support.enabled:
         return
-    state.support = support.find_support_plane(
-        state.working, state.descriptor <= state.threshold, state.working_camera,
-        tolerance_m=c.support.tolerance_m, below_fraction=c.support.below_fraction,
-    )
     kept = support.off_support(state.seams, state.surface, state.support, c.support.tolerance_m)
     reject_lost(state, state.seams, kept, Rejection.ON_SUPPORT)
     state.seams = kept
