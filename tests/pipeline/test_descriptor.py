@@ -4,7 +4,7 @@ import pytest
 from tests.test_pipeline_helpers import crease_points
 from weldseam.errors import InputError
 from weldseam.pipeline.descriptor import gradient_descriptor, valley_depth
-from weldseam.pipeline.neighbours import radius_graph
+from weldseam.pipeline.neighbours import centroid_offsets, radius_graph
 from weldseam.pipeline.normals import estimate_normals, pca_normals
 
 
@@ -50,7 +50,7 @@ def folded(bend_deg, spacing=0.0025, half_extent=0.03):
 def test_the_valley_depth_is_positive_in_a_valley_negative_on_a_ridge_and_zero_on_a_plane(bend_deg):
     for sign in (1, -1):
         points, normals = folded(sign * bend_deg)
-        depth = valley_depth(points, normals, radius_graph(points, 0.006))
+        depth = valley_depth(centroid_offsets(radius_graph(points, 0.006), points), normals)
         fold = (np.abs(points[:, 0]) < 0.0013) & (np.abs(points[:, 1]) < 0.01)
         inside = (np.abs(points[:, 0]) < 0.022) & (np.abs(points[:, 1]) < 0.022)  # whole neighbourhoods
         far = inside & (np.abs(points[:, 0]) > 0.015)
@@ -58,7 +58,7 @@ def test_the_valley_depth_is_positive_in_a_valley_negative_on_a_ridge_and_zero_o
         assert sign * np.median(depth[fold]) > 0.2 * 0.006 * np.tan(np.radians(bend_deg / 2))
         assert np.abs(depth[far]).max() < 1e-9
     flat, flat_normals = folded(0.0)
-    assert np.abs(valley_depth(flat, flat_normals, radius_graph(flat, 0.006))).max() < 1e-9
+    assert np.abs(valley_depth(centroid_offsets(radius_graph(flat, 0.006), flat), flat_normals)).max() < 1e-9
 
 
 def test_the_valley_depth_grows_with_the_bend():
@@ -66,5 +66,5 @@ def test_the_valley_depth_grows_with_the_bend():
     for bend_deg in (20.0, 45.0, 90.0):
         points, normals = folded(bend_deg)
         fold = (np.abs(points[:, 0]) < 0.0013) & (np.abs(points[:, 1]) < 0.01)
-        depths.append(np.median(valley_depth(points, normals, radius_graph(points, 0.006))[fold]))
+        depths.append(np.median(valley_depth(centroid_offsets(radius_graph(points, 0.006), points), normals)[fold]))
     assert depths[0] < depths[1] < depths[2]

@@ -1,7 +1,7 @@
 import numpy as np
 
 from weldseam.pipeline.boundary import inward_shift
-from weldseam.pipeline.neighbours import radius_graph
+from weldseam.pipeline.neighbours import centroid_offsets, radius_graph
 from weldseam.pipeline.normals import orient_toward, pca_normals
 from weldseam.pipeline.occlusion import ViewBuffer, occluded_rims
 
@@ -36,7 +36,7 @@ def test_only_the_flanges_end_under_a_wall_is_an_occluded_rim():
     camera = np.array([0.0, 0.0, 0.45])
     graph = radius_graph(points, 0.006)
     normals = orient_toward(pca_normals(points, graph), points, camera)
-    shift = inward_shift(points, normals, graph)
+    shift = inward_shift(centroid_offsets(graph, points), normals)
     view = ViewBuffer.build(points, camera, 0.001)
     rims = occluded_rims(points, shift, view, min_shift_m=0.25 * 0.006, past_m=(0.003, 0.006, 0.01),
                          margin_m=0.012)

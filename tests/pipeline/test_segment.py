@@ -4,7 +4,7 @@ from scipy.spatial import cKDTree
 from tests.test_pipeline_helpers import crease_points
 from weldseam.config import SegmentConfig
 from weldseam.pipeline.descriptor import gradient_descriptor, valley_depth
-from weldseam.pipeline.neighbours import radius_graph
+from weldseam.pipeline.neighbours import centroid_offsets, radius_graph
 from weldseam.pipeline.normals import estimate_normals
 from weldseam.pipeline.segment import (
     automatic_threshold, band_points, cluster_candidates, covered, dense_selection, noise_floor, wide_valleys,
@@ -82,7 +82,7 @@ def test_a_shallow_rippled_valley_is_found_over_the_wide_radius_not_the_fine_one
     points, across = rippled_valley(rng, 140.0)
     camera = np.array([0.0, 0.0, 0.5])
     graph = radius_graph(points, RADIUS)
-    depth = valley_depth(points, estimate_normals(points, graph, camera_origin_m=camera), graph)
+    depth = valley_depth(centroid_offsets(graph, points), estimate_normals(points, graph, camera_origin_m=camera))
     fine = depth > max(automatic_threshold(spacing_m=SPACING, normals_radius_m=RADIUS, descriptor_radius_m=RADIUS,
                                            variant="valley", min_crease_deg=20), noise_floor(depth, 2.0))
     fine = dense_selection(graph, fine, 0.25)

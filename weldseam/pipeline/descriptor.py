@@ -40,12 +40,13 @@ def gradient_descriptor(normals: np.ndarray, graph: sparse.csr_matrix, *, varian
     return neighbour_variance(graph, per_point)
 
 
-def valley_depth(points: np.ndarray, normals: np.ndarray, graph: sparse.csr_matrix) -> np.ndarray:
-    """(N,) h_i = (mean_j p_j - p_i) . n_i over each point's neighbours (rows of `graph`): how far
-    (m) they lie above its tangent plane, toward the camera. > 0 in a valley (a concave crease: a
+def valley_depth(offsets: np.ndarray, normals: np.ndarray) -> np.ndarray:
+    """(N,) h_i = (mean_j p_j - p_i) . n_i over each point's neighbours (`offsets`, the (N, 3)
+    centroid_offsets of the points' neighbourhood graph): how far (m) they lie above its tangent
+    plane, toward the camera. > 0 in a valley (a concave crease: a
     fillet's corner, a groove's bottom), < 0 on a ridge (a plate's edge, a groove's top edge), ~0
     on planes; largest on the crease line itself. Noise averages out over the neighbours."""
-    return np.einsum("ij,ij->i", neighbour_mean(graph, points) - points, normals)
+    return np.einsum("ij,ij->i", offsets, normals)
 
 
 def _normal_cosine_variance(graph, normals: np.ndarray) -> np.ndarray:

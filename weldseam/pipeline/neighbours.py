@@ -84,6 +84,12 @@ def neighbour_mean(graph: sparse.csr_matrix, values: np.ndarray) -> np.ndarray:
     return sums / (counts if sums.ndim == 1 else counts[:, None])
 
 
+def centroid_offsets(graph: sparse.csr_matrix, points: np.ndarray) -> np.ndarray:
+    """(N, 3) offset (m) from each point to the centroid of its neighbours (rows of `graph`):
+    mean_j p_j - p_i. The valley depth and the inward shift of a rim both start from it."""
+    return neighbour_mean(graph, points) - points
+
+
 def neighbour_variance(graph: sparse.csr_matrix, values: np.ndarray) -> np.ndarray:
     """Variance of the scalar `values` (N,) over each neighbourhood: E[v^2] - E[v]^2."""
     means = neighbour_mean(graph, np.column_stack([values, values * values]))

@@ -107,11 +107,12 @@ def _keys(cells: np.ndarray) -> np.ndarray:
     return cells[:, 0] * (1 << 32) + (cells[:, 1] + (1 << 31))
 
 
-def occluded_ends(points: np.ndarray, normals: np.ndarray, graph, view: ViewBuffer, params: PlanConfig) -> np.ndarray:
-    """(N,) True for the rims of the working surface (`points`, `normals`, their neighbourhood
-    `graph` within boundary.radius_m) past whose end the camera sees a wall's top (occluded_rims):
-    where a T-joint's flange meets a web whose face is too oblique to be seen."""
-    shift = inward_shift(points, normals, graph)
+def occluded_ends(points: np.ndarray, normals: np.ndarray, offsets: np.ndarray, view: ViewBuffer,
+                  params: PlanConfig) -> np.ndarray:
+    """(N,) True for the rims of the working surface (`points`, `normals`, the centroid_offsets of
+    their neighbourhoods within boundary.radius_m) past whose end the camera sees a wall's top
+    (occluded_rims): where a T-joint's flange meets a web whose face is too oblique to be seen."""
+    shift = inward_shift(offsets, normals)
     return occluded_rims(
         points, shift, view, min_shift_m=params.boundary.shift_ratio * params.boundary.radius_m, past_m=PAST_END_M,
         margin_m=params.joints.fillet_min_leg_m,

@@ -101,7 +101,7 @@ def _descriptor(state: PlanState, c: PlanConfig) -> None:
     depth (signed, on the crease line)."""
     graph = state.neighbourhoods(c.descriptor.radius_m)
     state.descriptor = descriptor.gradient_descriptor(state.normals, graph, variant=c.descriptor.variant)
-    state.valley = descriptor.valley_depth(state.working, state.normals, graph)
+    state.valley = descriptor.valley_depth(state.centroid_offsets(c.descriptor.radius_m), state.normals)
     state.dump("descriptor", state.working, state.descriptor)
 
 
@@ -131,7 +131,7 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
     if c.segment.occluded_ends and state.scan.camera_origin_m is not None and state.camera.ndim == 1:
         # One camera: rims past whose end it sees a wall's top; the view buffer is kept for one_face.
         state.view = occlusion.ViewBuffer.build(state.fine, state.camera, c.condition.voxel_m)
-        rims = occlusion.occluded_ends(state.working, state.normals, state.neighbourhoods(c.boundary.radius_m),
+        rims = occlusion.occluded_ends(state.working, state.normals, state.centroid_offsets(c.boundary.radius_m),
                                        state.view, c)  # fmt: skip
         found, too_short = _clusters(state, c, rims)
         state.creases += found

@@ -9,7 +9,7 @@ from scipy.spatial import cKDTree
 from weldseam.config import PlanConfig, SegmentConfig
 from weldseam.pipeline.descriptor import gradient_descriptor, valley_depth
 from weldseam.pipeline.grid import voxel_centroids, voxel_indices
-from weldseam.pipeline.neighbours import neighbour_mean, radius_graph
+from weldseam.pipeline.neighbours import centroid_offsets, neighbour_mean, radius_graph
 from weldseam.pipeline.normals import orient_toward, pca_normals
 
 # The wide valley pass works on voxel centroids this many times closer than its radius (about as
@@ -38,7 +38,7 @@ def automatic_threshold(
     normals *= np.where(normals[:, 2:3] < 0, -1.0, 1.0)
     graph = radius_graph(points, descriptor_radius_m)
     if variant == "valley":
-        values = valley_depth(points, normals, graph)
+        values = valley_depth(centroid_offsets(graph, points), normals)
     else:
         values = gradient_descriptor(normals, graph, variant=variant)
     on_fold = (np.abs(points[:, 0]) <= spacing_m / 2) & (np.abs(points[:, 1]) <= half_extent / 3)
@@ -111,7 +111,7 @@ def wide_valleys(points: np.ndarray, camera: np.ndarray, *, radius_m: float, min
         camera = camera[first]
     graph = radius_graph(coarse, radius_m)
     normals = orient_toward(pca_normals(coarse, graph), coarse, camera)
-    depth = valley_depth(coarse, normals, graph)
+    depth = valley_depth(centroid_offsets(graph, coarse), normals)
     threshold = max(
         automatic_threshold(spacing_m=spacing_m, normals_radius_m=radius_m, descriptor_radius_m=radius_m,
                             variant="valley", min_crease_deg=min_crease_deg),

@@ -15,7 +15,7 @@ from weldseam.config import PlanConfig, config_to_dict
 from weldseam.errors import StageError, WeldseamError
 from weldseam.pipeline import candidates, normals, occlusion
 from weldseam.pipeline.candidates import Candidate, Rejection
-from weldseam.pipeline.neighbours import radius_graph
+from weldseam.pipeline.neighbours import centroid_offsets, radius_graph
 from weldseam.pipeline.section import FineSurface
 from weldseam.types import Scan, WeldPath
 
@@ -38,6 +38,7 @@ class PlanState:
     working: np.ndarray | None = None
     working_camera: np.ndarray | None = None
     graphs: dict = field(default_factory=dict)
+    offsets_by_radius: dict = field(default_factory=dict)
     # normals, descriptor, segment, support
     normals: np.ndarray | None = None
     descriptor: np.ndarray | None = None
@@ -72,6 +73,13 @@ class PlanState:
         if radius_m not in self.graphs:
             self.graphs[radius_m] = radius_graph(self.working, radius_m)
         return self.graphs[radius_m]
+
+    def centroid_offsets(self, radius_m: float) -> np.ndarray:
+        """The working points' centroid_offsets over their neighbourhoods(radius_m), once per radius
+        (after smoothing: the valley depth and the occluded ends read the same ones)."""
+        if radius_m not in self.offsets_by_radius:
+            self.offsets_by_radius[radius_m] = centroid_offsets(self.neighbourhoods(radius_m), self.working)
+        return self.offsets_by_radius[radius_m]
 
 
 @contextmanager
