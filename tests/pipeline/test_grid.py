@@ -1,6 +1,6 @@
 import numpy as np
 
-from weldseam.pipeline.grid import voxel_centroids, voxel_indices
+from weldseam.pipeline.grid import voxel_centroids, voxel_grid
 
 
 def test_points_in_one_leaf_merge_to_their_centroid_and_leaves_apart_stay_apart(rng):
@@ -21,8 +21,9 @@ def test_the_grid_does_not_depend_on_the_order_of_the_points(rng):
 
 
 def test_each_point_s_voxel_index_is_that_of_its_centroid(rng):
-    points = rng.uniform(0.0, 0.1, (20_000, 3))
-    centroids, index = voxel_centroids(points, 0.008), voxel_indices(points, 0.008)
+    points = rng.uniform(0.0, 0.1, (30_000, 3))  # voxel_centroids on both cores, voxel_grid on one
+    centroids, index = voxel_grid(points, 0.008)
+    assert np.array_equal(centroids, voxel_centroids(points, 0.008))  # to the bit
     assert index.shape == (len(points),) and index.max() == len(centroids) - 1
     for voxel in (0, len(centroids) // 2, len(centroids) - 1):
         assert np.allclose(centroids[voxel], points[index == voxel].mean(axis=0))

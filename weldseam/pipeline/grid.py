@@ -34,9 +34,15 @@ def voxel_centroids(points: np.ndarray, leaf_m: float) -> np.ndarray:
     return np.concatenate(run_parts(in_range, range(len(blocks))))
 
 
-def voxel_indices(points: np.ndarray, leaf_m: float) -> np.ndarray:
-    """(N,) the index of each point's voxel among voxel_centroids(points, leaf_m) (ascending key)."""
-    return np.unique(_voxel_keys(points, leaf_m), return_inverse=True)[1].reshape(-1)
+def voxel_grid(points: np.ndarray, leaf_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """(centroids, index): voxel_centroids(points, leaf_m) and the index (N,) of each point's
+    voxel among them, from one sort of the keys (on one core; each voxel's sum runs over its
+    points in input order, as in voxel_centroids, so the centroids are the same to the bit)."""
+    if len(points) == 0:
+        return points.copy(), np.empty(0, np.intp)
+    _, inverse, counts = np.unique(_voxel_keys(points, leaf_m), return_inverse=True, return_counts=True)
+    inverse = inverse.reshape(-1)
+    return _voxel_means(points, inverse, counts), inverse
 
 
 def _voxel_keys(points: np.ndarray, leaf_m: float) -> np.ndarray:
@@ -49,5 +55,11 @@ def _voxel_keys(points: np.ndarray, leaf_m: float) -> np.ndarray:
 def _centroids(points: np.ndarray, keys: np.ndarray) -> np.ndarray:
     """Centroid of the points sharing each key, in ascending key order."""
     _, inverse, counts = np.unique(keys, return_inverse=True, return_counts=True)
+    return _voxel_means(points, inverse, counts)
+
+
+def _voxel_means(points: np.ndarray, inverse: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """Mean (M, 3) of the points in each voxel (`inverse` (N,) their voxel, `counts` (M,)), each
+    summed in input order."""
     sums = np.column_stack([np.bincount(inverse, weights=points[:, k], minlength=len(counts)) for k in range(3)])
     return sums / counts[:, None]

@@ -8,7 +8,7 @@ from scipy.spatial import cKDTree
 
 from weldseam.config import PlanConfig, SegmentConfig
 from weldseam.pipeline.descriptor import gradient_descriptor, valley_depth
-from weldseam.pipeline.grid import voxel_centroids, voxel_indices
+from weldseam.pipeline.grid import voxel_centroids, voxel_grid
 from weldseam.pipeline.neighbours import centroid_offsets, neighbour_mean, radius_graph
 from weldseam.pipeline.normals import orient_toward, pca_normals
 
@@ -100,10 +100,9 @@ def wide_valleys(points: np.ndarray, camera: np.ndarray, *, radius_m: float, min
     computed on the centroids of voxels radius_m / WIDE_NEIGHBOUR_SPACINGS wide; each point takes
     its voxel's answer (a centroid is seen from its first point's camera)."""
     spacing_m = radius_m / WIDE_NEIGHBOUR_SPACINGS
-    coarse = voxel_centroids(points, spacing_m)
+    coarse, voxel = voxel_grid(points, spacing_m)
     if len(coarse) < 3:
         return np.zeros(len(points), dtype=bool)
-    voxel = voxel_indices(points, spacing_m)
     camera = np.asarray(camera)
     if camera.ndim == 2:
         first = np.empty(len(coarse), np.intp)
