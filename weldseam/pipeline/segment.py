@@ -15,6 +15,8 @@ from weldseam.pipeline.normals import orient_toward, pca_normals
 # The wide valley pass works on voxel centroids this many times closer than its radius (about as
 # many neighbours as the fine pass has at its own radius and spacing).
 WIDE_NEIGHBOUR_SPACINGS = 2.5
+# A point must lie this factor (far above rounding) times the tolerance outside a box to be left out (covered).
+BOX_MARGIN = 1.000001
 
 
 def automatic_threshold(
@@ -145,9 +147,14 @@ def band_points(points: np.ndarray, params: SegmentConfig) -> np.ndarray:
 
 def covered(points: np.ndarray, candidates: list[cKDTree], tolerance_m: float, share: float = 0.5) -> bool:
     """Whether one of `candidates` (search trees over each candidate's points) lies within
-    `tolerance_m` of at least `share` of `points` (M, 3)."""
+    `tolerance_m` of at least `share` of `points` (M, 3). Only the points within that of a
+    candidate's bounding box (on every axis) are searched: the others cannot count."""
+    reach = tolerance_m * BOX_MARGIN
     for tree in candidates:
-        distance = tree.query(points, distance_upper_bound=tolerance_m)[0]
-        if np.mean(distance <= tolerance_m) >= share:
+        near = np.all((points >= tree.mins - reach) & (points <= tree.maxes + reach), axis=1)
+        if not near.any():
+            continue
+        distance = tree.query(points[near], distance_upper_bound=tolerance_m)[0]
+        if np.count_nonzero(distance <= tolerance_m) / len(points) >= share:
             return True
     return False
