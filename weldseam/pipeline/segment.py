@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
@@ -19,6 +21,7 @@ WIDE_NEIGHBOUR_SPACINGS = 2.5
 BOX_MARGIN = 1.000001
 
 
+@functools.lru_cache(maxsize=64)
 def automatic_threshold(
     *, spacing_m: float, normals_radius_m: float, descriptor_radius_m: float, variant: str, min_crease_deg: float
 ) -> float:
@@ -28,7 +31,8 @@ def automatic_threshold(
 
     A point passes when its surface bends at least as much as that crease does at its fold,
     so the rule is in physical terms (degrees), independent of noise level, point density
-    and the descriptor variant, and needs no tuning per scan.
+    and the descriptor variant, and needs no tuning per scan. A function of its parameters
+    alone: remembered (three per run, the same for every scan of a batch).
     """
     half_extent = 3.0 * max(normals_radius_m, descriptor_radius_m)
     ticks = np.arange(-half_extent, half_extent + spacing_m / 2, spacing_m)
