@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from weldseam.config import PlanConfig
-from weldseam.geometry import unit
+from weldseam.geometry import column_bounds, unit
 from weldseam.pipeline.boundary import inward_shift
 from weldseam.pipeline.one_face import PAST_END_M
 
@@ -87,8 +87,8 @@ def _nearest_per_bin(cells: np.ndarray, ranges: np.ndarray) -> np.ndarray | None
     """(K,) index of the nearest point (least range, then lowest index) in each occupied bin, bins
     in the order of their keys; by a dense array over the bins' bounding box, without sorting (None
     when that box holds more than MAX_DENSE_BINS_PER_POINT bins per point: sort instead)."""
-    low = cells.min(axis=0)
-    span = cells.max(axis=0) - low + 1
+    low, high = column_bounds(cells)  # column by column: along axis 0 it took 10 ms per 270k cells
+    span = high - low + 1
     bins = int(span[0]) * int(span[1])
     if bins > MAX_DENSE_BINS_PER_POINT * len(cells):
         return None
