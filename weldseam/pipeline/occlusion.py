@@ -21,6 +21,8 @@ from weldseam.pipeline.one_face import PAST_END_M
 # A scan's bins fill a box little larger than its point count; an outlier at a wide angle may
 # stretch the box, and past this many bins per point the buffer is built by sorting instead.
 MAX_DENSE_BINS_PER_POINT = 8
+# A query's bin and the eight around it (du, dv).
+AROUND = np.array([[du, dv] for du in (-1, 0, 1) for dv in (-1, 0, 1)])
 
 
 @dataclass(frozen=True, eq=False)
@@ -28,7 +30,8 @@ class ViewBuffer:
     """The nearest scan point per direction bin seen from `camera_m` (3,).
 
     frame: (3, 3) rows x, y, z, z the mean viewing direction; bin_rad: the angular bin;
-    keys: sorted bin keys (K,); nearest: (K,) index into `points` of the nearest point in each bin.
+    keys: sorted bin keys (K,); nearest: (K,) index into `points` of the nearest point in each bin;
+    nearest_ranges: (K,) their distances from camera_m (m).
     """
 
     camera_m: np.ndarray
@@ -37,6 +40,7 @@ class ViewBuffer:
     bin_rad: float
     keys: np.ndarray
     nearest: np.ndarray
+    nearest_ranges: np.ndarray
 
     @classmethod
     def build(cls, points: np.ndarray, camera_m: np.ndarray, spacing_m: float) -> ViewBuffer:
@@ -55,7 +59,7 @@ class ViewBuffer:
             order = np.lexsort((ranges, keys))
             first = np.r_[True, keys[order][1:] != keys[order][:-1]]
             nearest = order[first]
-        return cls(camera_m, points, frame, bin_rad, keys[nearest], nearest)
+        return cls(camera_m, points, frame, bin_rad, keys[nearest], nearest, ranges[nearest])
 
     def nearer_than(self, queries: np.ndarray, margin_m: float) -> np.ndarray:
         """(Q,) index of the nearest scan point seen in the direction of each query (its bin and the
@@ -63,12 +67,11 @@ class ViewBuffer:
         offsets = queries - self.camera_m
         ranges = np.linalg.norm(offsets, axis=1)
         cells = _cells(offsets, self.frame, self.bin_rad)
-        around = np.array([[du, dv] for du in (-1, 0, 1) for dv in (-1, 0, 1)])
-        keys = _keys((cells[None] + around[:, None]).reshape(-1, 2))
-        slot = np.clip(np.searchsorted(self.keys, keys), 0, len(self.keys) - 1)
+        keys = _keys((cells[None] + AROUND[:, None]).reshape(-1, 2))
+        slot = np.minimum(np.searchsorted(self.keys, keys), len(self.keys) - 1)
         hit = self.keys[slot] == keys
         index = np.where(hit, self.nearest[slot], -1).reshape(9, -1)
-        found = np.where(hit, np.linalg.norm(self.points[index.ravel()] - self.camera_m, axis=1), np.inf).reshape(9, -1)
+        found = np.where(hit, self.nearest_ranges[slot], np.inf).reshape(9, -1)
         # The first of the nine bins whose point is nearest (argmin: the first of equals).
         pick = np.argmin(found, axis=0)
         columns = np.arange(len(queries))
