@@ -139,14 +139,10 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
     state.short_candidates = [replace(candidates.cluster_candidate(state.working[members]), rejection=Rejection.TOO_SHORT)
                               for members in short]  # fmt: skip
     state.working_tree = cKDTree(state.working)
-    if c.support.enabled:
-        # Found here, not in _support: after the worker process forks (_probe), the trials'
-        # distance matrix (8 MB) would be written over pages both processes share, each copied
-        # first (40 ms instead of 11).
-        state.support = support.find_support_plane(
-            state.working, state.descriptor <= state.threshold, state.working_camera,
-            tolerance_m=c.support.tolerance_m, below_fraction=c.support.below_fraction,
-        )
+    if c.support.enabled:  # before the worker forks (_probe): its 8 MB would land on shared pages, each copied
+        state.support = support.find_support_plane(state.working, state.descriptor <= state.threshold,
+                                                   state.working_camera, tolerance_m=c.support.tolerance_m,
+                                                   below_fraction=c.support.below_fraction)  # fmt: skip
     chosen = [*state.clusters, *state.creases, *state.wide_valleys]
     state.dump("segment", state.working[np.concatenate(chosen)] if chosen else np.empty((0, 3)), None)
 
