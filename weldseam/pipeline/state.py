@@ -76,10 +76,13 @@ class PlanState:
 
     def centroid_offsets(self, radius_m: float) -> np.ndarray:
         """The working points' centroid_offsets over their neighbourhoods(radius_m), once per radius
-        (after smoothing: the valley depth and the occluded ends read the same ones)."""
-        if radius_m not in self.offsets_by_radius:
-            self.offsets_by_radius[radius_m] = centroid_offsets(self.neighbourhoods(radius_m), self.working)
-        return self.offsets_by_radius[radius_m]
+        and working cloud (the valley depth and the occluded ends read the same ones; smoothing
+        replaces the cloud, and offsets found before it are not reused)."""
+        working, offsets = self.offsets_by_radius.get(radius_m, (None, None))
+        if working is not self.working:
+            offsets = centroid_offsets(self.neighbourhoods(radius_m), self.working)
+            self.offsets_by_radius[radius_m] = (self.working, offsets)
+        return offsets
 
 
 @contextmanager
