@@ -11,6 +11,8 @@ from weldseam.pipeline.parallel import MIN_BLOCK_ROWS, graph_rows, map_row_block
 
 # Clouds this large are searched for pairs on both cores (radius_pairs).
 SPLIT_MIN_POINTS = 2 * MIN_BLOCK_ROWS
+# Fewer queries are answered on one thread (query_workers).
+THREADED_QUERIES = 2000
 # The (row, column) of each of the six distinct entries of a symmetric 3 x 3 matrix, in the
 # order they are passed around: xx, yy, zz, xy, xz, yz.
 COVARIANCE_ENTRIES = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
@@ -39,6 +41,12 @@ def radius_pairs(points: np.ndarray, radius_m: float) -> np.ndarray:
     )
     ends = np.column_stack([near_below[across["i"]], near_above[across["j"]]]).astype(np.int32)
     return np.concatenate([*within, np.sort(ends, axis=1)])
+
+
+def query_workers(count: int) -> int:
+    """cKDTree's `workers` for `count` queries: both cores (-1) for THREADED_QUERIES or more, else
+    this thread (1): it starts its threads anew for each call (~0.2 ms, more under load)."""
+    return -1 if count >= THREADED_QUERIES else 1
 
 
 def _pairs_within(points: np.ndarray, radius_m: float) -> np.ndarray:

@@ -46,7 +46,7 @@ from weldseam.pipeline import (
     trace,
 )
 from weldseam.pipeline.candidates import Rejection
-from weldseam.pipeline.neighbours import pairs_among, pairs_graph, radius_pairs
+from weldseam.pipeline.neighbours import pairs_among, pairs_graph, query_workers, radius_pairs
 from weldseam.pipeline.parallel import in_background, worker_process
 from weldseam.pipeline.section import FineSurface, PointFlag, pose_confidence, section_params
 from weldseam.pipeline.state import Dump, PlanState, chain_candidate, dump_seams, reject_lost, run_record, timed_step
@@ -56,8 +56,6 @@ MIN_POINTS = 100
 # The fine tree answers the sections' 25 mm balls (~2000 points each): with big leaves and
 # uncompacted nodes it is built in 33 ms instead of 58 and answers 600 balls in 107 ms, not 125.
 FINE_TREE_LEAF_SIZE = 128
-# Fewer queries are answered on this thread: cKDTree starts its threads anew for each call (~0.2 ms).
-THREADED_QUERIES = 2000
 
 
 def _condition(state: PlanState, c: PlanConfig) -> None:
@@ -182,7 +180,7 @@ def _pairing(state: PlanState, c: PlanConfig) -> None:
         in_cluster[members] = True
 
         def in_band(points: np.ndarray, in_cluster=in_cluster) -> np.ndarray:
-            return in_cluster[state.working_tree.query(points, workers=-1 if len(points) >= THREADED_QUERIES else 1)[1]]
+            return in_cluster[state.working_tree.query(points, workers=query_workers(len(points)))[1]]
 
         midpoints, _ = pairing.pair_midpoints(
             rim, tangent_radius_m=c.boundary.radius_m, angle_tolerance_deg=c.pairing.angle_tolerance_deg,
