@@ -3,7 +3,7 @@ import pytest
 
 from tests.test_pipeline_helpers import crease_points
 from weldseam.errors import InputError
-from weldseam.pipeline.descriptor import gradient_descriptor, valley_depth
+from weldseam.pipeline.descriptor import descriptor_and_offsets, gradient_descriptor, valley_depth
 from weldseam.pipeline.neighbours import centroid_offsets, radius_graph
 from weldseam.pipeline.normals import estimate_normals, pca_normals
 
@@ -28,6 +28,17 @@ def test_stronger_creases_give_larger_values():
         normals = estimate_normals(points, graph, camera_origin_m=np.array([0, 0, 1.0]))
         values.append(gradient_descriptor(normals, graph).max())
     assert values[0] < values[1] < values[2]
+
+
+@pytest.mark.parametrize("variant", ["released", "thesis"])
+def test_the_descriptor_and_the_offsets_from_one_pass_are_those_of_two(rng, variant):
+    points = crease_points(30, 0.0025)
+    points = points + rng.normal(0.0, 0.0002, points.shape)  # noise: sums that round
+    graph = radius_graph(points, 0.006)
+    normals = estimate_normals(points, graph, camera_origin_m=np.array([0, 0, 1.0]))
+    values, offsets = descriptor_and_offsets(points, normals, graph, variant=variant)
+    assert np.array_equal(values, gradient_descriptor(normals, graph, variant=variant))  # to the bit
+    assert np.array_equal(offsets, centroid_offsets(graph, points))
 
 
 def test_unknown_variant_is_refused():

@@ -8,7 +8,7 @@ import numpy as np
 from scipy import sparse
 
 from weldseam.errors import InputError
-from weldseam.pipeline.neighbours import graph_pairs, neighbour_mean, neighbour_variance
+from weldseam.pipeline.neighbours import centroid_offsets, graph_pairs, neighbour_mean, neighbour_variance
 
 VARIANTS = ("released", "thesis")
 
@@ -24,7 +24,7 @@ def gradient_descriptor(normals: np.ndarray, graph: sparse.csr_matrix, *, varian
     if variant not in VARIANTS:
         raise InputError(f"descriptor.variant must be one of {', '.join(VARIANTS)}, got {variant!r}")
     if variant == "released":
-        per_point = _normal_cosine_variance(graph, normals)
+        per_point = _cosine_variance(normals, neighbour_mean(graph, _normal_products(normals)))
     else:
         rows, cols = graph_pairs(graph)
         cosines = np.einsum("ij,ij->i", normals[rows], normals[cols])
@@ -40,6 +40,19 @@ def gradient_descriptor(normals: np.ndarray, graph: sparse.csr_matrix, *, varian
     return neighbour_variance(graph, per_point)
 
 
+def descriptor_and_offsets(
+    points: np.ndarray, normals: np.ndarray, graph: sparse.csr_matrix, *, variant: str
+) -> tuple[np.ndarray, np.ndarray]:
+    """(gradient_descriptor(normals, graph, variant=variant), centroid_offsets(graph, points)). For
+    the released variant the neighbour means of the normals' products and of the points come from
+    one pass over the graph, not two (77k points, 2.7M entries: 23 -> 14 ms CPU); each column is
+    summed as it is alone, so both are the same to the bit."""
+    if variant != "released":
+        return gradient_descriptor(normals, graph, variant=variant), centroid_offsets(graph, points)
+    means = neighbour_mean(graph, np.column_stack([_normal_products(normals), points]))
+    return neighbour_variance(graph, _cosine_variance(normals, means[:, :9])), means[:, 9:] - points
+
+
 def valley_depth(offsets: np.ndarray, normals: np.ndarray) -> np.ndarray:
     """(N,) h_i = (mean_j p_j - p_i) . n_i over each point's neighbours (`offsets`, the (N, 3)
     centroid_offsets of the points' neighbourhood graph): how far (m) they lie above its tangent
@@ -49,10 +62,16 @@ def valley_depth(offsets: np.ndarray, normals: np.ndarray) -> np.ndarray:
     return np.einsum("ij,ij->i", offsets, normals)
 
 
-def _normal_cosine_variance(graph, normals: np.ndarray) -> np.ndarray:
-    """var_j(n_i . n_j) = n_i^T (E[n n^T] - E[n] E[n]^T) n_i over each neighbourhood."""
+def _normal_products(normals: np.ndarray) -> np.ndarray:
+    """(N, 9) x, y, z, xx, yy, zz, xy, xz, yz of each normal: E[n] and E[n n^T] are their means."""
     x, y, z = normals.T
-    m = neighbour_mean(graph, np.column_stack([x, y, z, x * x, y * y, z * z, x * y, x * z, y * z]))
+    return np.column_stack([x, y, z, x * x, y * y, z * z, x * y, x * z, y * z])
+
+
+def _cosine_variance(normals: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """var_j(n_i . n_j) = n_i^T (E[n n^T] - E[n] E[n]^T) n_i over each neighbourhood, from the
+    neighbour means `m` (N, 9) of _normal_products."""
+    x, y, z = normals.T
     second = (
         x * x * m[:, 3] + y * y * m[:, 4] + z * z * m[:, 5]
         + 2 * (x * y * m[:, 6] + x * z * m[:, 7] + y * z * m[:, 8])

@@ -97,11 +97,13 @@ def _normals(state: PlanState, c: PlanConfig) -> None:
 
 
 def _descriptor(state: PlanState, c: PlanConfig) -> None:
-    """The published gradient descriptor (any bend, in a band along a crease's edges) and the valley
-    depth (signed, on the crease line)."""
-    graph = state.neighbourhoods(c.descriptor.radius_m)
-    state.descriptor = descriptor.gradient_descriptor(state.normals, graph, variant=c.descriptor.variant)
-    state.valley = descriptor.valley_depth(state.centroid_offsets(c.descriptor.radius_m), state.normals)
+    """The published gradient descriptor (any bend, a band along a crease's edges), the signed valley depth."""
+    radius = c.descriptor.radius_m
+    state.descriptor, offsets = descriptor.descriptor_and_offsets(
+        state.working, state.normals, state.neighbourhoods(radius), variant=c.descriptor.variant
+    )
+    state.offsets_by_radius[radius] = (state.working, offsets)  # the occluded ends' too (_segment)
+    state.valley = descriptor.valley_depth(offsets, state.normals)
     state.dump("descriptor", state.working, state.descriptor)
 
 
