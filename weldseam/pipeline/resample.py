@@ -73,8 +73,9 @@ def _travel(positions: np.ndarray, arc: np.ndarray, reach_m: float, period: floa
     itself, or on an open line within `inner_m` (default 2 sigma) of an end, the point that far
     in from that end (a window that holds samples on both sides; fitted at the end itself, the
     quadratic's slope swings with the noise of the last few points), the slope there carried to
-    the sample along the quadratic (c1 + 2 c2 (s - centre)). Unlike a chord, unbent by a seam's curve, also at its
-    ends, where a chord from the samples on one side tilts the torch along a 3-D curve by degrees.
+    the sample along the quadratic (c1 + 2 c2 (s - centre)). Unlike a chord, unbent by a seam's
+    curve, also at its ends, where a chord from the samples on one side tilts the torch along a
+    3-D curve by degrees.
     Circular distance with `period` (a closed line). Two samples: their chord. Also each fit's
     weighted rms distance (m) from the samples (K,)."""
     if len(positions) < 3:

@@ -102,8 +102,7 @@ def _descriptor(state: PlanState, c: PlanConfig) -> None:
     state.descriptor, offsets = descriptor.descriptor_and_offsets(
         state.working, state.normals, state.neighbourhoods(radius), variant=c.descriptor.variant
     )
-    state.offsets_by_radius[radius] = (state.working, offsets)  # the occluded ends' too (_segment)
-    state.valley = descriptor.valley_depth(offsets, state.normals)
+    state.valley = descriptor.valley_depth(state.keep_centroid_offsets(radius, offsets), state.normals)
     state.dump("descriptor", state.working, state.descriptor)
 
 
@@ -112,7 +111,8 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
     segment.threshold), and, apart from them, the valleys and the ridges where the signed bend
     exceeds its own (a groove's ridge never joins a plate's edge: on a narrow part the descriptor's
     bands merge). Clusters too short are recorded as rejected. The table under the part (_support)
-    is found here from the unbent points."""
+    is found here from the unbent points, before the worker forks (_probe): found after, its 8 MB of
+    temporaries would land on pages shared with the worker, each then copied."""
     state.threshold = c.segment.threshold
     if state.threshold is None:
         state.threshold = segment.crease_threshold(c, c.descriptor.variant)
@@ -141,7 +141,7 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
     state.short_candidates = [replace(candidates.cluster_candidate(state.working[members]), rejection=Rejection.TOO_SHORT)
                               for members in short]  # fmt: skip
     state.working_tree = cKDTree(state.working)
-    if c.support.enabled:  # before the worker forks (_probe): its 8 MB would land on shared pages, each copied
+    if c.support.enabled:
         state.support = support.find_support_plane(state.working, state.descriptor <= state.threshold,
                                                    state.working_camera, tolerance_m=c.support.tolerance_m,
                                                    below_fraction=c.support.below_fraction)  # fmt: skip

@@ -81,7 +81,14 @@ class PlanState:
         working, offsets = self.offsets_by_radius.get(radius_m, (None, None))
         if working is not self.working:
             offsets = centroid_offsets(self.neighbourhoods(radius_m), self.working)
-            self.offsets_by_radius[radius_m] = (self.working, offsets)
+            self.keep_centroid_offsets(radius_m, offsets)
+        return offsets
+
+    def keep_centroid_offsets(self, radius_m: float, offsets: np.ndarray) -> np.ndarray:
+        """Remember `offsets`, computed elsewhere (the descriptor's pass: the occluded ends read them
+        when boundary.radius_m is its radius), as the working points' centroid_offsets over
+        neighbourhoods(radius_m); returns them."""
+        self.offsets_by_radius[radius_m] = (self.working, offsets)
         return offsets
 
 

@@ -162,22 +162,23 @@ def trace_chain(
     # A shallow corner's point is known less well across than a square one's (across_spread).
     max_offset = params.max_offset_m * np.array([fit.geometry.across_spread for fit in fits])
     valid = np.array([fit.kind == joint for fit in fits]) & consistent(positions, axes, max_offset, params.max_turn_deg)
-    seams = []
-    for run, closed in _valid_runs(chain.points, valid, chain.closed, params.max_gap_m):
-        run_fits = [fits[i] for i in run]
-        seams.append(
-            TracedSeam(
-                positions_m=np.array([fit.point_m for fit in run_fits]),
-                torch_axes=np.array([fit.torch_axis for fit in run_fits]),
-                closed=closed,
-                joint=joint,
-                confidence=round(confidence, 3),
-                half_opening_m=float(np.median([fit.half_opening_m for fit in run_fits])),
-                across_spread=float(np.median([fit.geometry.across_spread for fit in run_fits])),
-                flags=np.array([fit.flags for fit in run_fits], np.uint8),
-            )
-        )
-    return seams
+    return [_piece([fits[i] for i in run], closed, joint, confidence)
+            for run, closed in _valid_runs(chain.points, valid, chain.closed, params.max_gap_m)]  # fmt: skip
+
+
+def _piece(fits: list[SectionFit], closed: bool, joint: JointKind, confidence: float) -> TracedSeam:
+    """The seam of a run of valid `fits`: their points, axes and flags, the medians of their
+    half-openings and across_spreads, `confidence` to 0.001."""
+    return TracedSeam(
+        positions_m=np.array([fit.point_m for fit in fits]),
+        torch_axes=np.array([fit.torch_axis for fit in fits]),
+        closed=closed,
+        joint=joint,
+        confidence=round(confidence, 3),
+        half_opening_m=float(np.median([fit.half_opening_m for fit in fits])),
+        across_spread=float(np.median([fit.geometry.across_spread for fit in fits])),
+        flags=np.array([fit.flags for fit in fits], np.uint8),
+    )
 
 
 def _fitting(fits: list[SectionFit]) -> float:
