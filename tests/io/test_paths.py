@@ -284,6 +284,22 @@ def test_atomic_write_os_failure_is_an_input_error_and_cleans_up(tmp_path, monke
     assert list(tmp_path.iterdir()) == []
 
 
+def test_a_stop_signal_handled_as_the_temp_file_is_made_leaves_no_temp(tmp_path, monkeypatch):
+    """A signal arriving during os.open is handled as the call returns, with the file made: a batch
+    worker's SIGTERM then raises SystemExit there (batch_workers._exit_cleanly)."""
+    real_open = atomic.os.open
+
+    def open_then_stopped(*args):
+        os.close(real_open(*args))
+        raise SystemExit(143)
+
+    monkeypatch.setattr(atomic.os, "open", open_then_stopped)
+    path = tmp_path / "part0.json"
+    with pytest.raises(SystemExit):
+        atomic_write(path, b"data")
+    assert list(tmp_path.iterdir()) == []
+
+
 @pytest.mark.skipif(os.name != "posix" or os.geteuid() == 0, reason="root ignores permissions")
 def test_atomic_write_read_only_directory(tmp_path):
     folder = tmp_path / "locked"

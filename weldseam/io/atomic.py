@@ -23,6 +23,11 @@ def atomic_write(path: str | Path, data: bytes) -> None:
         descriptor = os.open(temp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
     except OSError as error:
         raise InputError(f"{path}: cannot write ({error.strerror})") from None
+    except BaseException:
+        # A signal that came during the call is handled as it returns, the file already made (a
+        # batch worker's SIGTERM raises SystemExit): it is removed as on any later failure.
+        temp.unlink(missing_ok=True)
+        raise
     try:
         with os.fdopen(descriptor, "wb") as file:
             file.write(data)
