@@ -25,6 +25,15 @@ def test_a_stub_too_short_to_be_a_seam_does_not_split_one():
     assert len(seams) == 1 and np.array_equal(seams[0].positions_m, through.positions_m)
 
 
+def test_a_stub_too_short_for_its_kind_does_not_split_a_seam():
+    """A 30 mm step ending on a ring fillet's interior is no lap (a lap runs at least 50 mm): it
+    is dropped before the fillet is split, not after, which would leave the fillet in two."""
+    through = piece(line([0, 0, 0], [0.1, 0, 0]), JointKind.FILLET)
+    stub = piece(line([0.05, 0.003, 0], [0.05, 0.033, 0]), JointKind.LAP)
+    seams = split_seams([through, stub], [], SplitConfig(), step_m=0.002)
+    assert len(seams) == 1 and np.array_equal(seams[0].positions_m, through.positions_m)
+
+
 def test_a_seam_mostly_interpolated_across_a_hole_is_not_a_seam():
     seam = piece(line([0, 0, 0], [0.036, 0, 0]))
     flags = np.zeros(len(seam.positions_m), np.uint8)

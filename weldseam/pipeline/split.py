@@ -1,7 +1,8 @@
 """Split: the final seams, one per branch at T and Y junctions, with the holes each crossed.
 
-Fragments that joined nothing are noise, and a piece too short to be a seam is no branch: they
-are dropped before splitting (one would be dropped after splitting a real seam). A seam is split
+Fragments that joined nothing are noise, and a piece too short to be a seam (of any kind, or of its
+own: joints.min_length_m) is no branch: they are dropped before splitting (one would be dropped
+after splitting a real seam, leaving it in two). A seam is split
 where another seam ends on its interior; the pieces each carry the holes in the scan whose middle
 lies on them.
 
@@ -31,7 +32,8 @@ def split_seams(seams: list[TracedSeam], holes: list[Hole], params: SplitConfig,
     (joints.min_length_m), clean somewhere or no shorter than min_inferred_length_m (see the
     module's docstring), and with the holes whose middle lies within `step_m` (the spacing of the
     points bridged across them) of one of its points."""
-    seams = [seam for seam in seams if seam.length_m >= max(params.min_branch_m, params.min_seam_length_m)]
+    seams = [seam for seam in seams
+             if seam.length_m >= max(params.min_branch_m, params.min_seam_length_m, min_length_m(seam.joint))]
     seams = split_at_junctions(seams, tolerance_m=params.junction_m)
     return [_with_holes(seam, holes, step_m) for seam in seams
             if seen_length(seam) >= params.min_seam_length_m and seam.length_m >= min_length_m(seam.joint)
