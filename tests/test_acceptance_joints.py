@@ -55,8 +55,6 @@ KNOWN_GAPS: dict[tuple[str, int], set[str]] = {
     ("valley", 1): {"position", "coverage"},
     # Found since the wide valley pass (20 mm); its 147-degree corner scatters 1.3 mm across.
     ("valley", 4): {"position", "coverage", "axis"},
-    # Both seams found with their kinds; the lap's trace stops short of one end.
-    ("lap_and_fillet", 1): {"coverage"},
 }
 # Scenes holding two joint kinds: each seam must come out named by its own.
 MIXED_FAMILIES = ("lap_and_fillet", "v_groove_and_square_butt")

@@ -118,6 +118,16 @@ def test_a_step_with_too_little_of_either_plate_beside_it_is_no_lap(rng):
     assert isinstance(lap.fit(SortedProfile.of(u[near], w[near], PARAMS)), NoFit)
 
 
+@pytest.mark.parametrize("top_side", [1, -1])
+def test_a_dropout_hiding_either_plate_past_a_few_mm_leaves_the_lap(rng, top_side):
+    """Sensor dropouts hide the bottom plate beyond the corner as often as the top plate beyond its
+    edge: with 6 mm of either one seen (the lines are fitted parallel, the other plate gives the
+    slope), the corner is still found."""
+    u, w, corner, axis = lap_profile(rng, top_side=top_side, face_seen=False)
+    for hidden in (top_side * (0.002 - u) > 0.006, top_side * (u - 0.002) > 0.006):
+        assert_corner(lap.fit(SortedProfile.of(u[~hidden], w[~hidden], PARAMS)), corner, axis)
+
+
 def test_a_groove_beside_a_step_is_no_lap(rng):
     """A plate's end seen with what lies below it, a V-groove in the plate 6-12 mm from the end:
     the plate does not run flat to its edge as a lap's top plate does."""

@@ -36,13 +36,14 @@ MIN_STEP_M = 0.0015
 MAX_STEP_M = 0.007
 # The step must stand this many times the surfaces' noise above it.
 MIN_STEP_SIGMAS = 2.0
-# The bottom plate's surface runs at least MIN_BOTTOM_M out from the corner (the bottom plate
-# reaches out beyond the top one), the top plate's at least MIN_TOP_M from its edge (a dropout may
-# hide the rest of it), each straight (MIN_INLIER_FRACTION of its side's points on its line); two
-# surfaces both MIN_BOTTOM_M long lie within MAX_SKEW_DEG of parallel (a shorter one's own slope
-# says little).
-MIN_BOTTOM_M = 0.010
-MIN_TOP_M = 0.005
+# Each plate's surface runs at least MIN_PLATE_M out from the corner, straight (MIN_INLIER_FRACTION
+# of its side's points on its line). A dropout may hide the rest of either plate (the bottom one's
+# beyond the corner as often as the top one's beyond its edge), and the two lines are fitted
+# parallel: the longer one gives the slope, and a few mm of the other fix its level. Two surfaces
+# both LONG_SURFACE_M long lie within MAX_SKEW_DEG of parallel (a shorter one's own slope says
+# little), and the plates are free of a groove over that much beside the step (_dips).
+MIN_PLATE_M = 0.005
+LONG_SURFACE_M = 0.010
 MIN_INLIER_FRACTION = 0.7
 MAX_SKEW_DEG = 10.0
 # A surface is only as long as the stretch its points fill with gaps of at most this.
@@ -102,14 +103,14 @@ def fit(profile: SortedProfile) -> ProfileFit | NoFit:
         ((plates.right, plates.right_y0), plates.left)
     bottom_reach, bottom_end = _surface_end(bottom[0][bottom[2]], -side)
     top_reach, top_end = _surface_end(top[0][top[2]], side)
-    if bottom_reach < MIN_BOTTOM_M or top_reach < MIN_TOP_M:
-        return NoFit("less than 10 mm of the bottom plate or 5 mm of the top plate beside the step")
+    if min(bottom_reach, top_reach) < MIN_PLATE_M:
+        return NoFit("less than 5 mm of a plate's surface beside the step")
     gap = side * (top_end - bottom_end)
     edge_s = top_end if gap > SHADOW_GAP_M else (top_end + bottom_end) / 2
     top_y0 = plates.right_y0 if side > 0 else plates.left_y0
     depth = max(3 * plates.sigma, SURFACE_BAND_M)
-    if _dips(bottom, bottom_y0, plates.slope, depth, (edge_s - side * MIN_BOTTOM_M, edge_s)) or \
-            _dips(top, top_y0, plates.slope, depth, (edge_s + side * SHADOW_GAP_M, edge_s + side * MIN_BOTTOM_M)):
+    if _dips(bottom, bottom_y0, plates.slope, depth, (edge_s - side * LONG_SURFACE_M, edge_s)) or \
+            _dips(top, top_y0, plates.slope, depth, (edge_s + side * SHADOW_GAP_M, edge_s + side * LONG_SURFACE_M)):
         return NoFit("a depression in a plate beside the step (a groove)")
     # Back to the section frame: (s, t) = s along + t normal.
     plates_along = (along + plates.slope * normal) / np.hypot(1.0, plates.slope)
@@ -154,7 +155,7 @@ def _parallel_surfaces(x: np.ndarray, y: np.ndarray) -> _Plates | NoFit:
             return NoFit("a plate surface is not a straight line")
         sides.append((px, py, inliers, line(px[inliers], py[inliers])[1]))
     (lx, ly, left_in, left_slope), (rx, ry, right_in, right_slope) = sides
-    long_sides = min(np.ptp(lx[left_in]), np.ptp(rx[right_in])) >= MIN_BOTTOM_M
+    long_sides = min(np.ptp(lx[left_in]), np.ptp(rx[right_in])) >= LONG_SURFACE_M
     if long_sides and abs(np.degrees(np.arctan(left_slope) - np.arctan(right_slope))) > MAX_SKEW_DEG:
         return NoFit("the two surfaces are not parallel")
     # The edge face's points beside the break lean on one side's line: the two lines, fitted
