@@ -50,7 +50,6 @@ KNOWN_GAPS: dict[tuple[str, int], set[str]] = {
     ("tacked", 2): {"position"},
     ("clutter", 1): {"position"},
     ("clutter", 2): {"count", "position", "coverage", "axis"},
-    ("clutter", 4): {"count", "coverage"},
     ("valley", 0): {"count", "position", "coverage", "axis"},
     ("valley", 1): {"position", "coverage"},
     # Found since the wide valley pass (20 mm); its 147-degree corner scatters 1.3 mm across.

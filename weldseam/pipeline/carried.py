@@ -15,11 +15,12 @@ vector) where they turn round it (a pipe); where they do not (a plate), the face
 direction. In a section ahead the face runs from the corner along r made perpendicular to the
 travel, which says nothing where r runs almost along the seam.
 
-The corner is where the seen face ends toward the unseen one (the camera sees a face up to the
-corner when the other is turned away), the torch axis the bisector of the two. The unseen face
-must be turned away from the camera: seen at grazing incidence or edge-on (seen more squarely, it
-would have been measured and its absence is a dropout; seen from behind, it would hide the seen
-face's end, which is then the edge of its shadow). The fit records one face seen.
+The corner is where the seen face ends toward the unseen one, turning into the carried direction,
+the torch axis the bisector of the two. The unseen face is one the camera did not measure: seen at
+grazing incidence or edge-on, or facing it but lost in a dropout or in the stereo shadow a
+structured-light or stereo sensor casts beside a wall (its second view, a baseline away, does not
+see the foot); the seen face still runs up to the corner. It must not be seen from behind: then it
+would hide the seen face's end, which is the edge of its shadow. The fit records one face seen.
 """
 
 from __future__ import annotations
@@ -47,10 +48,6 @@ RULED_RATIO = 3.0
 # A ruling within asin(0.5) = 30 degrees of the travel says little of the face's direction across
 # the section.
 MIN_ACROSS = 0.5
-# The unseen face is turned at least this far from the camera: past 60 degrees of incidence. A face
-# measured is seen to ~75 degrees (one_face.OBLIQUE_COS: 70), and a carried direction is good to
-# some 5-10 degrees.
-OBLIQUE_COS = 0.5
 # The faces' included angle, as the fillet model takes it.
 MIN_INCLUDED_DEG = 45.0
 MAX_INCLUDED_DEG = 160.0
@@ -195,8 +192,8 @@ def _corner(u, w, unseen_side: int, unseen: np.ndarray, toward, params: JointsCo
     # The unseen face's normal, out of the work: toward the seen face's side of it.
     unseen_normal = np.array([-unseen[1], unseen[0]])
     unseen_normal = unseen_normal if unseen_normal @ along_face > 0 else -unseen_normal
-    if not -EDGE_ON_COS <= unseen_normal @ toward <= OBLIQUE_COS:
-        return None
+    if unseen_normal @ toward < -EDGE_ON_COS:
+        return None  # seen from behind: it would hide the seen face's end
     axis = -unit(along_face + unseen)
     geometry = JointGeometry(included_deg=included, legs_m=None, faces_seen=1)
     outline = (corner + along_face, corner, corner + unseen)
