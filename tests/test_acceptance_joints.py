@@ -33,9 +33,6 @@ KNOWN_GAPS: dict[tuple[str, int], set[str]] = {
     ("lap", 0): {"position", "coverage"},
     ("lap", 2): {"coverage"},
     ("square_butt", 2): {"coverage"},
-    # Two traces of the seam reach its end; the longer, kept, took three fits 2-3 mm off at its
-    # ends (mean 0.60 mm): trim_overlaps keeps the longest of duplicates, not the best fitted.
-    ("bevel", 4): {"position"},
     # A face bowing over 1 mm is no plate's (what keeps a pipe's front from passing for a roof):
     # the ripple bows this scene's faces so in a few sections, and the trace stops there.
     ("outside_corner", 3): {"coverage"},

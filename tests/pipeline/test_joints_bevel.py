@@ -65,6 +65,19 @@ def test_noisy_sparse_and_quantised_bevels_are_centred(rng):
     assert len(offsets) >= 20 and abs(np.mean(offsets)) < 0.0003
 
 
+def test_a_bevel_whose_walls_top_is_lost_in_the_noise_is_still_found_and_centred(rng):
+    """In 0.7 mm of noise the surface takes in what lies within 3 sigma (2.1 mm) below it: the
+    top of a 50-degree bevel wall, whose last surface point then lies ~2.5 mm inside its edge. The
+    wall's own line still finds that edge, and the seam is the middle of the opening."""
+    offsets = []
+    for _ in range(30):
+        u, w, seam, _ = bevel_profile(rng, noise=0.0007, pitch=0.0008, bevel_deg=50.0, square_seen=True)
+        fit = bevel.fit(SortedProfile.of(u, w, PARAMS))
+        if not isinstance(fit, NoFit):
+            offsets.append(fit.u - seam[0])
+    assert len(offsets) >= 6 and abs(np.mean(offsets)) < 0.0003
+
+
 def test_the_bevel_model_centres_a_bevel_the_v_groove_model_pulls_toward_the_bevel(rng):
     """The V-groove model assumes mirrored walls: where the square wall is seen, its seam falls
     off the opening's middle; the bevel model explains the section better and is chosen."""

@@ -75,7 +75,8 @@ def fit(profile: SortedProfile) -> ProfileFit | NoFit:
     if deepest < params.groove_min_depth_m:
         return NoFit("depression shallower than joints.groove_min_depth_m")
     gx, gd = x[groove], depth[groove]
-    sides = [edges for edges in (_edges(gx, gd, ends, bevel_side) for bevel_side in (0, 1)) if edges is not None]
+    sides = [edges for edges in (_edges(gx, gd, ends, bevel_side, depth_limit) for bevel_side in (0, 1))
+             if edges is not None]
     if not sides:
         return NoFit("no bevel wall and square wall")
     bevel_x, square_x, bevel_slope = min(sides, key=lambda edges: edges[3])[:3]
@@ -94,10 +95,13 @@ def fit(profile: SortedProfile) -> ProfileFit | NoFit:
                       tuple((float(a), float(b)) for a, b in outline))  # fmt: skip
 
 
-def _edges(x, depth, ends, bevel_side: int):
+def _edges(x, depth, ends, bevel_side: int, depth_limit: float = 0.0):
     """(bevel edge, square edge, bevel slope or None (hidden), score) along the surface with the
     bevel on side `bevel_side` (0: lower x) of the depression (points x, depth), `ends` the
-    surface's (last point, edge past it) on each side, or None where the depression is not so."""
+    surface's (last point, edge past it) on each side, or None where the depression is not so.
+    The bevel wall's edge lies within EDGE_TOLERANCE_M of the surface's last point on its side, or
+    within depth_limit / slope (m) of it: a wall point passes for surface down to `depth_limit`
+    below it (a shallow bevel in 1 mm of noise: 2-5 mm)."""
     (bevel_last, bevel_hidden), (square_last, square_hidden) = ends[bevel_side], ends[1 - bevel_side]
     toward = 1.0 if bevel_side == 0 else -1.0  # from the bevel's side toward the square one
     near_square = np.abs(x - square_last) <= SQUARE_WALL_M + np.abs(square_hidden - square_last)
@@ -107,7 +111,7 @@ def _edges(x, depth, ends, bevel_side: int):
     bevel = _bevel_wall(x[clear], depth[clear], toward)
     if bevel is not None:
         bevel_x, bevel_slope, score, root_x = bevel
-        if abs(bevel_x - bevel_last) > EDGE_TOLERANCE_M:
+        if abs(bevel_x - bevel_last) > max(EDGE_TOLERANCE_M, depth_limit / bevel_slope):
             return None
         if square is None and abs(square_x - root_x) > MAX_ROOT_GAP_M:
             return None  # a V with its other wall hidden: that wall's edge lies out at its mirror image
