@@ -95,7 +95,7 @@ def fit(profile: SortedProfile) -> ProfileFit | NoFit:
                       tuple((float(a), float(b)) for a, b in outline))  # fmt: skip
 
 
-def _edges(x, depth, ends, bevel_side: int, depth_limit: float = 0.0):
+def _edges(x, depth, ends, bevel_side: int, depth_limit: float):
     """(bevel edge, square edge, bevel slope or None (hidden), score) along the surface with the
     bevel on side `bevel_side` (0: lower x) of the depression (points x, depth), `ends` the
     surface's (last point, edge past it) on each side, or None where the depression is not so.
