@@ -7,7 +7,7 @@ from tests.pipeline.test_join import line, piece
 from weldseam.config import SplitConfig
 from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.section import PointFlag
-from weldseam.pipeline.split import split_at_junctions, split_seams
+from weldseam.pipeline.split import split_at_junctions, split_seams, straight_length_m
 
 
 def test_a_seam_is_split_where_another_ends_on_it():
@@ -52,6 +52,37 @@ def test_a_seam_shorter_than_its_kinds_shortest_is_dropped(kind):
     assert [seam.joint for seam in kept] == [JointKind.V_GROOVE]
     long_one = split_seams([piece(line([0, 0, 0], [0.06, 0, 0]), kind)], [], SplitConfig(), step_m=0.002)
     assert len(long_one) == 1
+
+
+def outline(*corners):
+    """A polyline through `corners` (x, y in m, z = 0), points 2 mm apart on each side."""
+    return np.vstack([line([*a, 0], [*b, 0])[1 if k else 0:] for k, (a, b) in enumerate(zip(corners[:-1], corners[1:]))])
+
+
+@pytest.mark.parametrize("kind", [JointKind.LAP, JointKind.OUTSIDE_CORNER])
+def test_a_step_round_a_clamps_arm_is_no_lap_however_long(kind):
+    """A clamp's arm, 30 mm wide, lying 25 mm onto a plate and beyond its edge over a block as
+    high as the plate: its outline is a step of a lap plate's height, 30 + 30 + 25 + 25 mm, with
+    corners. A lap plate's edge runs 50 mm or more between its corners: along an L of 60 and 40 mm
+    it is a lap."""
+    arm = piece(outline((0.0, 0.03), (0.025, 0.03), (0.025, 0.0), (0.0, 0.0), (0.0, -0.025)), kind)
+    assert arm.length_m > 0.1 and straight_length_m(arm) == pytest.approx(0.03, abs=0.002)
+    assert split_seams([arm], [], SplitConfig(), step_m=0.002) == []
+    plate = piece(outline((0.0, 0.0), (0.06, 0.0), (0.06, 0.04)), kind)
+    assert straight_length_m(plate) == pytest.approx(0.06, abs=0.002)
+    assert len(split_seams([plate], [], SplitConfig(), step_m=0.002)) == 1
+
+
+def test_a_curve_has_no_corner_and_a_loop_runs_on_across_its_closing_point():
+    """A lap round a disc of 30 mm radius turns 38 degrees over each 20 mm: no corner, its whole
+    188 mm counts. A 60 mm square plate's outline, closed, is four stretches of 60 mm."""
+    angle = np.linspace(0.0, 2 * np.pi, 95, endpoint=False)
+    disc = replace(piece(np.column_stack([0.03 * np.cos(angle), 0.03 * np.sin(angle), 0 * angle]), JointKind.LAP),
+                   closed=True)
+    assert straight_length_m(disc) == pytest.approx(disc.length_m)
+    square = replace(piece(outline((0, 0), (0.06, 0), (0.06, 0.06), (0, 0.06), (0, 0.002)), JointKind.LAP),
+                     closed=True)
+    assert straight_length_m(square) == pytest.approx(0.06, abs=0.002)
 
 
 @pytest.mark.parametrize("flag", [PointFlag.ONE_FACE, PointFlag.ROUGH, PointFlag.ONE_FACE | PointFlag.ROUGH])

@@ -2,7 +2,10 @@
 
 Fragments that joined nothing are noise, and a piece too short to be a seam (of any kind, or of its
 own: joints.min_length_m) is no branch: they are dropped before splitting (one would be dropped
-after splitting a real seam, leaving it in two). A seam is split
+after splitting a real seam, leaving it in two). A kind's shortest length is counted along its
+longest stretch between sharp corners (straight_length_m): a lap or an outside corner runs along a
+plate's edge, while the outline of a clamp's arm on a plate, a step of a lap plate's height, turns
+round the arm's end in 20-30 mm stretches. A seam is split
 where another seam ends on its interior; the pieces each carry the holes in the scan whose middle
 lies on them.
 
@@ -21,9 +24,17 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from weldseam.config import SplitConfig
+from weldseam.geometry import arc_lengths
 from weldseam.pipeline.joints import min_length_m
 from weldseam.pipeline.section import PointFlag
 from weldseam.pipeline.trace import Hole, TracedSeam
+
+# A corner is where a seam turns by more than SHARP_TURN_DEG between its chords of CORNER_CHORD_M
+# before and after a point: a plate's or an arm's corner, rounded by a few mm, turns 90 degrees;
+# an arc turns that much only at radii under CORNER_CHORD_M / radians(SHARP_TURN_DEG) = 13 mm,
+# and noise of 0.3 mm across turns a 10 mm chord by 2-3 degrees.
+SHARP_TURN_DEG = 45.0
+CORNER_CHORD_M = 0.010
 
 
 def split_seams(seams: list[TracedSeam], holes: list[Hole], params: SplitConfig, step_m: float) -> list[TracedSeam]:
@@ -33,11 +44,47 @@ def split_seams(seams: list[TracedSeam], holes: list[Hole], params: SplitConfig,
     module's docstring), and with the holes whose middle lies within `step_m` (the spacing of the
     points bridged across them) of one of its points."""
     seams = [seam for seam in seams
-             if seam.length_m >= max(params.min_branch_m, params.min_seam_length_m, min_length_m(seam.joint))]
+             if seam.length_m >= max(params.min_branch_m, params.min_seam_length_m) and long_enough(seam)]
     seams = split_at_junctions(seams, tolerance_m=params.junction_m)
     return [_with_holes(seam, holes, step_m) for seam in seams
-            if seen_length(seam) >= params.min_seam_length_m and seam.length_m >= min_length_m(seam.joint)
+            if seen_length(seam) >= params.min_seam_length_m and long_enough(seam)
             and (measured(seam) or seam.length_m >= params.min_inferred_length_m)]
+
+
+def long_enough(seam: TracedSeam) -> bool:
+    """Whether the seam is no shorter than its kind's shortest seam (joints.min_length_m) along its
+    longest stretch between sharp corners (straight_length_m)."""
+    shortest = min_length_m(seam.joint)
+    return shortest == 0 or (seam.length_m >= shortest and straight_length_m(seam) >= shortest)
+
+
+def straight_length_m(seam: TracedSeam) -> float:
+    """Arc length (m) of the seam's longest stretch between corners, each corner at the sharpest
+    point of a run of points whose chords CORNER_CHORD_M long before and after them turn by more
+    than SHARP_TURN_DEG (a loop's stretches run on across its closing segment; with no corner,
+    its whole length)."""
+    along = arc_lengths(seam.positions_m, seam.closed)
+    total = float(along[-1])
+    points = np.vstack([seam.positions_m, seam.positions_m[:1]]) if seam.closed else seam.positions_m
+    here = along[:-1] if seam.closed else along
+    period = total if seam.closed else None
+
+    def at(s: np.ndarray) -> np.ndarray:
+        return np.column_stack([np.interp(s, along, points[:, k], period=period) for k in range(3)])
+
+    middle = at(here)
+    incoming, outgoing = middle - at(here - CORNER_CHORD_M), at(here + CORNER_CHORD_M) - middle
+    lengths = np.linalg.norm(incoming, axis=1) * np.linalg.norm(outgoing, axis=1)
+    cosine = np.sum(incoming * outgoing, axis=1) / np.maximum(lengths, 1e-12)
+    turning = cosine < np.cos(np.radians(SHARP_TURN_DEG))
+    if not seam.closed:
+        turning &= (here >= CORNER_CHORD_M) & (here <= total - CORNER_CHORD_M)
+    runs = np.split(np.flatnonzero(turning), np.flatnonzero(np.diff(np.flatnonzero(turning)) > 1) + 1)
+    corners = np.array([here[run[np.argmin(cosine[run])]] for run in runs if len(run)])
+    if not len(corners):
+        return total
+    bounds = np.r_[corners, corners[0] + total] if seam.closed else np.r_[0.0, corners, total]
+    return float(np.diff(bounds).max())
 
 
 def seen_length(seam: TracedSeam) -> float:

@@ -25,8 +25,9 @@ from weldseam.pipeline.joints.robust import fraction, line, mean, median, noise
 KIND = JointKind.LAP
 # Where the step lies does not depend on where the window sits.
 CENTRED = False
-# A top plate's edge runs the plate's length; a shorter step is something lying on the plate: a
-# clamp's arm (20-30 mm wide, reaching 12-25 mm onto it: up to ~50 mm round its end) or a bar's end.
+# A top plate's edge runs the plate's length between its corners; a shorter step is something lying
+# on the plate: a clamp's arm (20-30 mm wide, reaching 12-25 mm onto it, its outline turning round
+# its end: split.straight_length_m) or a bar's end.
 MIN_LENGTH_M = 0.05
 SPECIALISES = None
 # Thinnest and thickest top plate (m, 2-6 mm with the noise of its measure): a step under 1.5 mm
