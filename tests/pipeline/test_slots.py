@@ -12,21 +12,21 @@ from tests.conftest import planned_broad_case, rejected_gaps_to_fixtures_m
 from weldseam.config import PlanConfig
 from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.section import FineSurface, section_params
-from weldseam.pipeline.slots import gap_to_table, in_line_seams, sides_turn_deg, slot
+from weldseam.pipeline.slots import gap_to_table, in_line_seams, sides_apart, slot
 from weldseam.pipeline.trace import TracedSeam
 
 REACH_M = PlanConfig().section.half_width_m
 
 
-def slot_height(x, turn_deg, width=0.005):
-    """Height (m) of the profile at x (m): see the module docstring."""
-    left_face = np.where(x < -width / 2, np.tan(np.radians(turn_deg)) * (-x - width / 2), 0.0)
+def slot_height(x, turn_deg, width=0.005, step_m=0.0):
+    """Height (m) of the profile at x (m): see the module docstring; the left face `step_m` higher."""
+    left_face = np.where(x < -width / 2, np.tan(np.radians(turn_deg)) * (-x - width / 2) + step_m, 0.0)
     return np.where(np.abs(x) <= width / 2, -0.014 * (x + width / 2) / width - 0.002, left_face)
 
 
-def slot_surface(rng, turn_deg, pitch=0.001):
+def slot_surface(rng, turn_deg, pitch=0.001, step_m=0.0):
     x, y = (a.ravel() for a in np.meshgrid(np.arange(-0.03, 0.03, pitch), np.arange(0.0, 0.06, pitch)))
-    points = np.column_stack([x, y, slot_height(x, turn_deg) + rng.normal(0.0, 0.0002, x.size)])
+    points = np.column_stack([x, y, slot_height(x, turn_deg, step_m=step_m) + rng.normal(0.0, 0.0002, x.size)])
     return FineSurface(points, cKDTree(points), section_params(PlanConfig()))
 
 
@@ -39,7 +39,14 @@ def seam_along_slot(joint=JointKind.V_GROOVE):
 def test_the_turn_between_the_sides_is_measured(rng, turn_deg):
     x = np.sort(rng.uniform(-0.025, 0.025, 400))
     h = slot_height(x, turn_deg) + rng.normal(0.0, 0.0002, len(x))
-    assert sides_turn_deg(x, h, -0.0025, 0.0025, REACH_M) == pytest.approx(turn_deg, abs=1.0)
+    assert sides_apart(x, h, -0.0025, 0.0025, REACH_M)[0] == pytest.approx(turn_deg, abs=1.0)
+
+
+@pytest.mark.parametrize("step_m", [0.0, 0.001, 0.004])
+def test_the_step_between_the_sides_at_the_seam_is_measured(rng, step_m):
+    x = np.sort(rng.uniform(-0.025, 0.025, 400))
+    h = slot_height(x, 0.0, step_m=step_m) + rng.normal(0.0, 0.0005, len(x))
+    assert sides_apart(x, h, -0.0025, 0.0025, REACH_M)[1] == pytest.approx(step_m, abs=0.0003)
 
 
 def test_a_few_stray_points_below_a_side_do_not_turn_it(rng):
@@ -47,12 +54,12 @@ def test_a_few_stray_points_below_a_side_do_not_turn_it(rng):
     h = slot_height(x, 0.0) + rng.normal(0.0, 0.0002, len(x))
     stray = (x > 0.008) & (x < 0.011)  # a plate's edge seen 10 mm below, inside the window
     h[stray] -= 0.010
-    assert sides_turn_deg(x, h, -0.0025, 0.0025, REACH_M) < 2.0
+    assert sides_apart(x, h, -0.0025, 0.0025, REACH_M)[0] < 2.0
 
 
 def test_a_side_too_narrow_to_set_a_direction_is_not_measured(rng):
     x = np.sort(rng.uniform(-0.025, 0.005, 300))  # nothing right of the slot past 2.5 mm
-    assert sides_turn_deg(x, slot_height(x, 20.0), -0.0025, 0.0025, REACH_M) is None
+    assert sides_apart(x, slot_height(x, 20.0), -0.0025, 0.0025, REACH_M) is None
 
 
 @pytest.mark.parametrize("joint", [JointKind.V_GROOVE, JointKind.BEVEL, JointKind.SQUARE_BUTT])
@@ -67,6 +74,15 @@ def test_a_groove_between_sides_turned_25_degrees_is_a_slot_and_dropped(rng, joi
 def test_a_groove_between_plates_in_line_or_bent_a_little_is_kept(rng, turn_deg):
     seam = seam_along_slot()
     assert in_line_seams([seam], slot_surface(rng, turn_deg), REACH_M) == [seam]
+
+
+def test_a_groove_beside_a_block_4_mm_lower_is_a_slot_and_dropped(rng):
+    """A block's top and a clamp's block standing beside it 4 mm lower, turned 6 degrees (less than
+    a slot's turn), a slot between: the step says they are two parts side by side. A butt joint's
+    plates 1 mm out of level (high-low) are kept."""
+    seam = seam_along_slot()
+    assert in_line_seams([seam], slot_surface(rng, 6.0, step_m=0.004), REACH_M) == []
+    assert in_line_seams([seam], slot_surface(rng, 6.0, step_m=0.001), REACH_M) == [seam]
 
 
 def test_a_corner_between_turned_faces_is_no_butt_joint_and_is_kept(rng):
@@ -134,12 +150,15 @@ def test_the_same_gap_with_no_table_found_is_kept(rng):
     assert in_line_seams([seam], surface, REACH_M, None, 0.002) == [seam]
 
 
-@pytest.mark.parametrize("thickness_m", [0.008, 0.020])
-def test_a_v_groove_down_to_the_table_through_its_root_gap_is_kept(rng, thickness_m):
-    """A 70-degree V through the whole plate with a 1 mm root gap: the table is seen at its
-    bottom, but its walls close in (depth = (opening - gap) / (2 tan 35 deg)): a groove."""
-    half_top = 0.0005 + thickness_m * np.tan(np.radians(35.0))
-    surface = extruded(rng, [(-0.03, thickness_m), (-half_top, thickness_m), (-0.0005, 0.0), (0.0005, 0.0),
+@pytest.mark.parametrize(("thickness_m", "included_deg", "root_gap_m"), [(0.008, 70.0, 0.001), (0.020, 70.0, 0.001),
+                                                                         (0.006, 90.0, 0.002)])
+def test_a_v_groove_down_to_the_table_through_its_root_gap_is_kept(rng, thickness_m, included_deg, root_gap_m):
+    """A V through the whole plate with a root gap: the table is seen at its bottom, and with its
+    walls' feet within a mm of it over up to 4 mm, but its walls close in from the opening
+    (depth = (opening - gap) / (2 tan(included / 2))): a groove."""
+    half_gap = root_gap_m / 2
+    half_top = half_gap + thickness_m * np.tan(np.radians(included_deg / 2))
+    surface = extruded(rng, [(-0.03, thickness_m), (-half_top, thickness_m), (-half_gap, 0.0), (half_gap, 0.0),
                              (half_top, thickness_m), (0.03, thickness_m)])  # fmt: skip
     seam = groove_seam(0.0, thickness_m, half_top)
     assert not gap_to_table(seam, surface, TABLE, 0.002)
@@ -160,6 +179,18 @@ def test_a_bar_beside_a_plate_gives_no_seam_and_both_grooves_are_kept():
     gaps_m = rejected_gaps_to_fixtures_m(scene, state, Rejection.SLOT)
     assert gaps_m
     assert all(gap < 0.01 for gap in gaps_m)  # beside a fixture (the bar)
+
+
+def test_a_bar_beside_a_plate_leaving_the_table_seen_across_a_wide_gap_is_dropped(rng):
+    """A 15 mm plate (x < 0) and a 15 mm bar (x > 12 mm) on the table: the 12 mm gap is no deeper
+    than walls including 30 degrees could reach across it (22 mm), but the table is seen across
+    its floor over 11 mm, not through a root gap: the plate and the bar stand apart on it."""
+    surface = extruded(rng, [(-0.03, 0.015), (0.0, 0.015), (0.0005, 0.0), (0.0115, 0.0), (0.012, 0.015),
+                             (0.03, 0.015)])  # fmt: skip
+    seam = groove_seam(0.006, 0.015, 0.006)
+    assert not slot(seam, surface, REACH_M)  # its sides are in line
+    assert gap_to_table(seam, surface, TABLE, 0.002)
+    assert in_line_seams([seam], surface, REACH_M, TABLE, 0.002) == []
 
 
 @pytest.mark.parametrize("joint", [JointKind.SQUARE_BUTT, JointKind.V_GROOVE])
