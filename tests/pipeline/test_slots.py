@@ -150,6 +150,23 @@ def test_the_same_gap_with_no_table_found_is_kept(rng):
     assert in_line_seams([seam], surface, REACH_M, None, 0.002) == [seam]
 
 
+@pytest.mark.parametrize(("family", "seed"), [("block_groove", 13), ("ring_groove", 13)])
+def test_a_part_beside_a_fixture_gives_no_seam_and_the_groove_is_kept(family, seed):
+    """Two of the project's own broad-world scenes drawn with seeds past those the planner was
+    developed on: a clamp's block standing beside a block part, its top 4 mm lower (block_groove
+    13: a second, 100 mm V-groove 59 mm from the seam), and a bar lying 12 mm beside the plate,
+    the table seen across the gap's floor (ring_groove 13: a 31 mm V 45 mm from it). Now the one
+    path is the groove, and the candidates rejected as slots lie at the fixtures."""
+    from weldseam.pipeline.candidates import Rejection
+
+    scene, state = planned_broad_case(family, seed, "split")
+    truth = cKDTree(np.vstack([seam.points_m for seam in scene.seams]))
+    assert len(state.seams) == 1 and np.median(truth.query(state.seams[0].positions_m)[0]) < 0.0005
+    gaps_m = rejected_gaps_to_fixtures_m(scene, state, Rejection.SLOT)
+    assert gaps_m
+    assert all(gap < 0.01 for gap in gaps_m)
+
+
 @pytest.mark.parametrize(("thickness_m", "included_deg", "root_gap_m"), [(0.008, 70.0, 0.001), (0.020, 70.0, 0.001),
                                                                          (0.006, 90.0, 0.002)])
 def test_a_v_groove_down_to_the_table_through_its_root_gap_is_kept(rng, thickness_m, included_deg, root_gap_m):

@@ -2,6 +2,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from scipy.spatial import cKDTree
 
 from tests.pipeline.test_join import line, piece
 from weldseam.config import SplitConfig
@@ -71,6 +72,21 @@ def test_a_step_round_a_clamps_arm_is_no_lap_however_long(kind):
     plate = piece(outline((0.0, 0.0), (0.06, 0.0), (0.06, 0.04)), kind)
     assert straight_length_m(plate) == pytest.approx(0.06, abs=0.002)
     assert len(split_seams([plate], [], SplitConfig(), step_m=0.002)) == 1
+
+
+def test_a_clamps_arm_on_a_plate_gives_no_lap_and_the_groove_is_kept():
+    """The project's own broad-world ring groove, seed 15 (past the seeds the planner was
+    developed on): a clamp's arm 6 mm thick lying on the plate was a 96 mm lap round the arm's
+    outline, 25-40 mm from the groove. Now the one path is the groove, and the candidates dropped
+    as fragments include the arm's, at the clamp."""
+    from tests.conftest import planned_broad_case, rejected_gaps_to_fixtures_m
+    from weldseam.pipeline.candidates import Rejection
+
+    scene, state = planned_broad_case("ring_groove", 15, "split")
+    truth = cKDTree(np.vstack([seam.points_m for seam in scene.seams]))
+    assert [seam.joint for seam in state.seams] == [JointKind.V_GROOVE]
+    assert np.median(truth.query(state.seams[0].positions_m)[0]) < 0.0005
+    assert min(rejected_gaps_to_fixtures_m(scene, state, Rejection.FRAGMENT)) < 0.005
 
 
 def test_a_curve_has_no_corner_and_a_loop_runs_on_across_its_closing_point():
