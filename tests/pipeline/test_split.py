@@ -57,7 +57,8 @@ def test_a_seam_shorter_than_its_kinds_shortest_is_dropped(kind):
 
 def outline(*corners):
     """A polyline through `corners` (x, y in m, z = 0), points 2 mm apart on each side."""
-    return np.vstack([line([*a, 0], [*b, 0])[1 if k else 0:] for k, (a, b) in enumerate(zip(corners[:-1], corners[1:]))])
+    sides = zip(corners[:-1], corners[1:])
+    return np.vstack([line([*a, 0], [*b, 0])[1 if k else 0 :] for k, (a, b) in enumerate(sides)])
 
 
 @pytest.mark.parametrize("kind", [JointKind.LAP, JointKind.OUTSIDE_CORNER])

@@ -105,7 +105,7 @@ def gap_to_table(seam: TracedSeam, surface: FineSurface, support, tolerance_m: f
     floor = np.array([_floor_m(surface, f, travel[k], support, tolerance_m) for k, f in measured])
     draw_in = depth * np.tan(np.radians(MIN_INCLUDED_DEG / 2))
     apart = (opening > surface.params.joints.gap_max_m) & ((opening - floor) / 2 < draw_in)
-    bottoms = np.array([f.point_m for _, f in measured]) + depth[:, None] * np.array([f.torch_axis for _, f in measured])
+    bottoms = np.array([f.point_m + d * f.torch_axis for (_, f), d in zip(measured, depth)])
     on_table = np.abs((bottoms - centre) @ normal) <= tolerance_m
     return np.count_nonzero(apart) > len(measured) / 2 and np.count_nonzero(apart & on_table) >= MIN_MEASURED
 

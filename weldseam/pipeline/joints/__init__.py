@@ -3,10 +3,11 @@ a residual and the measured geometry, or no fit with the reason.
 
 A model is a module with `KIND` (a JointKind), `CENTRED` (whether its fit assumes the joint in the
 middle of the section window), `MIN_LENGTH_M` (the shortest seam of its kind, m, between sharp
-corners; 0: as short as split.min_seam_length_m allows), `SPECIALISES` (the kind it is a special case of, or None) and
-`fit(profile: SortedProfile) -> ProfileFit | NoFit`, the fit with its outline. Every model of a
-section reads one SortedProfile, which computes what several of them derive (the plate surface
-line) once. Adding a joint kind means adding one model module and its entry in MODELS.
+corners; 0: as short as split.min_seam_length_m allows), `SPECIALISES` (the kind it is a special
+case of, or None) and `fit(profile: SortedProfile) -> ProfileFit | NoFit`, the fit with its
+outline. Every model of a section reads one SortedProfile, which computes what several of them
+derive (the plate surface line) once. Adding a joint kind means adding one model module and its
+entry in MODELS.
 """
 
 from __future__ import annotations
