@@ -66,20 +66,21 @@ def straight_length_m(seam: TracedSeam) -> float:
     along = arc_lengths(seam.positions_m, seam.closed)
     total = float(along[-1])
     points = np.vstack([seam.positions_m, seam.positions_m[:1]]) if seam.closed else seam.positions_m
-    here = along[:-1] if seam.closed else along
+    here = along[:-1] if seam.closed else along  # each seam point's arc length
     period = total if seam.closed else None
 
     def at(s: np.ndarray) -> np.ndarray:
         return np.column_stack([np.interp(s, along, points[:, k], period=period) for k in range(3)])
 
-    middle = at(here)
+    middle = seam.positions_m
     incoming, outgoing = middle - at(here - CORNER_CHORD_M), at(here + CORNER_CHORD_M) - middle
     lengths = np.linalg.norm(incoming, axis=1) * np.linalg.norm(outgoing, axis=1)
     cosine = np.sum(incoming * outgoing, axis=1) / np.maximum(lengths, 1e-12)
     turning = cosine < np.cos(np.radians(SHARP_TURN_DEG))
     if not seam.closed:
         turning &= (here >= CORNER_CHORD_M) & (here <= total - CORNER_CHORD_M)
-    runs = np.split(np.flatnonzero(turning), np.flatnonzero(np.diff(np.flatnonzero(turning)) > 1) + 1)
+    index = np.flatnonzero(turning)
+    runs = np.split(index, np.flatnonzero(np.diff(index) > 1) + 1)
     corners = np.array([here[run[np.argmin(cosine[run])]] for run in runs if len(run)])
     if not len(corners):
         return total
