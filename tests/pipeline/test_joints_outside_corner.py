@@ -105,6 +105,41 @@ def test_a_face_seen_short_of_its_edge_moves_the_seam_only_along_the_torch_axis(
     assert abs(np.mean(across)) < 0.0001 and abs(np.mean(along)) < 0.0005
 
 
+@pytest.mark.parametrize("view_deg", [0.0, 25.0, -25.0])
+def test_wall_points_smeared_along_the_line_of_sight_do_not_lift_the_seam(rng, view_deg):
+    """Depth noise (0.5 mm, along a line of sight view_deg off the bisector) spreads a V wall's
+    points around it: its points beside the edge fall within the face's noise band for a
+    millimetre past the edge, and the face's last point in the band lies that far inside it. The
+    edge is where the wall turns off the face (a hinge fitted to every point beside it), so the
+    seam, on the bisector as deep as the edges, does not rise toward the ridge (it did by 0.35-0.6
+    mm when each edge was its face's last point in the band)."""
+    sight = np.array([np.sin(np.radians(view_deg)), np.cos(np.radians(view_deg))])
+    along, distance = [], []
+    for _ in range(30):
+        u, w, seam, axis = corner_profile(rng, noise=0.0, pitch=0.0004, depth_m=0.004, half_deg=35.0)
+        error = rng.normal(0.0, 0.0005, len(u))
+        u, w = u + error * sight[0], w + error * sight[1]
+        order = np.argsort(u)
+        fit = fit_profile(u[order], w[order], PARAMS)
+        assert fit.kind == CORNER
+        offset = np.array([fit.u - seam[0], fit.w - seam[1]])
+        along.append(offset @ axis)
+        distance.append(np.hypot(*offset))
+    assert abs(np.mean(along)) < 0.00015 and np.mean(distance) < 0.00035
+
+
+def test_a_notch_cut_on_one_side_of_the_ridge_is_no_outside_corner(rng):
+    """Two plates' V is cut symmetrically about the faces' bisector. A notch whose one edge lies 3 mm
+    out and whose other lies at the ridge (a plate's end face on its support, beside the support's
+    face) has its edges 3 mm unequally far from the bisector: no outside corner (it was one, its
+    seam on the bisector, 1.5 mm from the notch's middle)."""
+    for _ in range(20):
+        u = np.arange(-0.025, 0.025, 0.0005) + rng.uniform(0.0, 0.0005)
+        notch = (u > -0.003) & (u < 0.0)
+        w = np.where(notch, -0.003 - 0.5 * (u + 0.003), -np.abs(u)) + rng.normal(0.0, 0.0003, len(u))
+        assert isinstance(outside_corner.fit(SortedProfile.of(u, w, PARAMS)), NoFit)
+
+
 def test_points_seen_through_the_root_gap_do_not_tilt_the_faces(rng):
     """A sensor sees through an open root gap the inside of the joint, 9-22 mm below the ridge.
     Those few points pull a least-squares break off the ridge, and a face's inlier band taken from

@@ -4,8 +4,10 @@ open V along the ridge.
 The profile is a roof: two straight faces sloping down away from a ridge (a break between two
 lines, the break minimising the total squared error; each face refitted to the half of its points
 farthest from the break), at an outer included angle of MIN_ROOF_DEG-MAX_ROOF_DEG, with a V notch
-where they would meet. Each top edge of the V is where its face ends toward the ridge (the camera
-sees a surface up to its edge; the V's walls are often hidden). Between the edges lies the V: its
+where they would meet. Each top edge of the V is where its wall turns off its face (a hinge fitted to
+the points beside the edge), or, where the V shows no wall, where its face ends toward the ridge
+(the camera sees a surface up to its edge); each face is then fitted again to its points outside
+its edge, and its edge sought again from that line. Between the edges lies the V: its
 points (if any are seen) at least `groove_min_depth_m` below the roof; a plain ridge, whose faces
 run into each other, is no outside corner. The torch axis is minus the bisector of the two faces'
 outward normals; the V is cut symmetrically about it, so the seam point (the midpoint of the two
@@ -62,6 +64,20 @@ EDGE_GAPS = 5
 # A wall's line meets its face at most this far beyond the face's last point; farther, the line
 # is noise.
 WALL_REACH_M = 0.003
+# The spacing of the hinge positions tried for a wall's edge (m).
+HINGE_STEP_M = 0.00005
+# A V wall turns at least this far from its face (they meet at 65 degrees or more: faces 30-70 degrees
+# from the bisector, walls 20-45 on its other side); a gentler bend is the face's own noise.
+MIN_WALL_TURN_DEG = 45.0
+# The hinge reads the points from the face out to this share of the way from the face's end to the V's
+# bottom: deeper lie the root gap's walls and what is seen through it, not the wall.
+WALL_SHARE = 0.8
+# The fewest points past a hinge that show a wall: its position and slope, and one to spare.
+MIN_WALL_POINTS = 3
+# The V is cut symmetrically about the faces' bisector: its two edges lie equally far from it, within
+# the edges' noise (2 sigma) or this (per section, 96-100 % of the sections of the outside corners
+# of seeds 0-29 lie within it; a plate's edge lying on a wedge, 4-28 %).
+MAX_ASYMMETRY_M = 0.0015
 # A face ends at its last point within max(EDGE_SIGMAS sigma, MIN_EDGE_BAND_M) of its line.
 EDGE_SIGMAS = 2.5
 MIN_EDGE_BAND_M = 0.0003
@@ -109,7 +125,8 @@ def fit(profile: SortedProfile) -> ProfileFit | NoFit:
         return NoFit("the faces end too far apart for a V (a dropout)")
     if notch is not None:  # what lies deeper than a V that wide is seen through its root gap
         apex_above = a_left + b_left * apex_u - (a_left + b_left * left_edge + a_right + b_right * right_edge) / 2
-        notch = notch[depth[notch] <= apex_above + MAX_DEPTH_PER_OPENING * (right_edge - left_edge) + 0.001]
+        in_v = depth <= apex_above + MAX_DEPTH_PER_OPENING * (right_edge - left_edge) + 0.001
+        notch = notch[in_v[notch]]
     if notch is None or len(notch) == 0:
         deepest, bottom = None, None
         left_edge, right_edge = left_seen, right_seen
@@ -119,19 +136,35 @@ def fit(profile: SortedProfile) -> ProfileFit | NoFit:
             return NoFit("no V below the ridge (shallower than joints.groove_min_depth_m)")
         deep = notch[depth[notch] >= 0.8 * deepest]
         bottom = np.array([median(u[deep]), median(w[deep])])
-        left_edge = _wall_edge(u, w, (a_left, b_left), left_edge, bottom[0], left_seen)
-        right_edge = _wall_edge(u, w, (a_right, b_right), right_edge, bottom[0], right_seen)
+        v_u, v_w = u[in_v], w[in_v]
+        left_edge = _wall_edge(v_u, v_w, (a_left, b_left), left_edge, bottom[0], left_seen)
+        right_edge = _wall_edge(v_u, v_w, (a_right, b_right), right_edge, bottom[0], right_seen)
+        # A face is what lies outside its edge: a grazing wall's points within its band tilt its line.
+        (a_left, b_left), (a_right, b_right) = (
+            _outside(u, w, (a_left, b_left), left_edge, -1, sigma_left),
+            _outside(u, w, (a_right, b_right), right_edge, 1, sigma_right),
+        )
+        left_edge = _wall_edge(v_u, v_w, (a_left, b_left), left_edge, bottom[0], left_edge)
+        right_edge = _wall_edge(v_u, v_w, (a_right, b_right), right_edge, bottom[0], right_edge)
     geometry = JointGeometry(opening_m=0.0, depth_m=deepest, included_deg=float(roof), legs_m=(left_reach, right_reach))
     return _on_bisector(((a_left, b_left), (a_right, b_right)), (left_edge, right_edge), bottom, geometry, sigma)
 
 
-def _on_bisector(faces, edges, bottom, geometry: JointGeometry, sigma: float) -> ProfileFit:
+def _outside(u, w, face, edge: float, away: int, sigma: float) -> tuple[float, float]:
+    """The face's line (intercept, slope) fitted again to its points outside `edge` (toward `away`)
+    within max(3 sigma, SURFACE_BAND_M) of it; the line as it was with fewer than MIN_SIDE_POINTS."""
+    intercept, slope = face
+    on = (away * (u - edge) >= 0) & (np.abs(w - (intercept + slope * u)) <= max(3 * sigma, SURFACE_BAND_M))
+    return line(u[on], w[on]) if np.count_nonzero(on) >= MIN_SIDE_POINTS else face
+
+
+def _on_bisector(faces, edges, bottom, geometry: JointGeometry, sigma: float) -> ProfileFit | NoFit:
     """The fit of faces ((a, b) of w = a + b u, left and right) whose V's top edges lie at u =
     `edges` (left, right), with the V's bottom (u, w) or None: the torch axis is minus the
     bisector of the faces' outward normals. The V is cut symmetrically about it: the seam lies on
-    it (the long faces place it well), as deep below the apex as the two edges on average. A
-    wall's shallowest points pass for its face, so one edge may fall up to a millimetre inside;
-    on the bisector that moves the seam only along the torch axis, by a third of it."""
+    it (the long faces place it well), as deep below the apex as the two edges on average; edges
+    lying unequally far from it (by more than max(MAX_ASYMMETRY_M, 2 sigma)) are no such V (a
+    plate's edge lying on its support, the step of its end face beside the support's face)."""
     (a_left, b_left), (a_right, b_right) = faces
     left = np.array([edges[0], a_left + b_left * edges[0]])
     right = np.array([edges[1], a_right + b_right * edges[1]])
@@ -139,6 +172,9 @@ def _on_bisector(faces, edges, bottom, geometry: JointGeometry, sigma: float) ->
     axis = -unit(unit(normal_left) + unit(normal_right))
     apex_u = (a_right - a_left) / (b_left - b_right)
     apex = np.array([apex_u, a_left + b_left * apex_u])
+    across = np.array([axis[1], -axis[0]])
+    if abs(abs((left - apex) @ across) - abs((right - apex) @ across)) > max(MAX_ASYMMETRY_M, 2 * sigma):
+        return NoFit("the V's edges lie unequally far from the faces' bisector (no V cut symmetrically)")
     seam = apex + axis * float(((left - apex) @ axis + (right - apex) @ axis) / 2)
     to_left, to_right = unit(np.array([-1.0, -b_left])), unit(np.array([1.0, b_right]))
     outline = (left + to_left, left, seam if bottom is None else bottom, right, right + to_right)
@@ -158,25 +194,37 @@ def _notch(u: np.ndarray, deep: np.ndarray, apex_u: float) -> np.ndarray | None:
 
 
 def _wall_edge(u, w, face, face_end: float, bottom_u: float, hidden: float) -> float:
-    """Where a V wall meets its face (`face` = (intercept, slope): the line w = intercept +
-    slope u): a line depth = c + m u (depth below the face) through the wall's points between 15
-    and 80 % of the way from the face's end to the V's bottom, solved for depth 0 where it meets
-    the face in range (from WALL_REACH_M beyond the face's end to the wall's middle); where the
-    wall is not seen so (too few points, a narrow V), `hidden`: just past the face's last point,
-    where a hidden wall's edge lies."""
+    """Where a V wall turns off its face (`face` = (intercept, slope): the line w = intercept +
+    slope u), from the depths below the face r = w - face(u) of the points from WALL_REACH_M
+    beyond the face's end to WALL_SHARE of the way to the V's bottom: the hinge e, on a
+    HINGE_STEP_M grid from there to the wall's middle, that best explains them as 0 up to e and
+    m d past it (d the distance past e toward the bottom, m < 0 by least squares; the wall must
+    turn at least MIN_WALL_TURN_DEG off the face): e maximising (sum r d)^2 / sum d^2.
+
+    Every point beside the edge counts: a grazing wall's points, smeared along the line of sight,
+    lie within the face's noise band for a millimetre past its edge, so the face's last point in
+    the band lies up to that far inside it (and the seam, on the bisector, that much too high).
+    Where no wall is seen so (fewer than 4 points past e, or none below the face), `hidden`: just
+    past the face's last point, where a hidden wall's edge lies."""
     intercept, slope = face
-    low, high = sorted((face_end + 0.15 * (bottom_u - face_end), face_end + 0.8 * (bottom_u - face_end)))
-    wall = (u >= low) & (u <= high)
-    count = np.count_nonzero(wall)
-    if count < 4 or high - low < 0.0006:
-        return hidden
-    c, m = line(u[wall], intercept + slope * u[wall] - w[wall])
-    if abs(m) < 0.2:
-        return hidden
-    edge = -c / m
     side = np.sign(face_end - bottom_u)  # the face lies this way from the bottom
-    inner, outer = float(np.add.reduce(u[wall])) / count, face_end + side * WALL_REACH_M
-    return float(edge) if min(inner, outer) <= edge <= max(inner, outer) else hidden
+    outer, inner = face_end + side * WALL_REACH_M, (face_end + bottom_u) / 2
+    window = (u - (face_end + WALL_SHARE * (bottom_u - face_end))) * side >= 0
+    window &= (outer - u) * side >= 0
+    if np.count_nonzero(window) < MIN_WALL_POINTS or abs(outer - inner) < HINGE_STEP_M:
+        return hidden
+    uw, depth = u[window], w[window] - (intercept + slope * u[window])
+    edges = np.arange(outer, inner, -side * HINGE_STEP_M)
+    past = np.maximum(side * (edges[:, None] - uw[None, :]), 0.0)
+    product, spread = past @ depth, np.einsum("ij,ij->i", past, past)
+    drop = product / np.maximum(spread, 1e-18)  # the wall's depth below the face per unit u past e
+    turn = np.abs(np.arctan(slope - side * drop) - np.arctan(slope))
+    steep = (product < 0) & (spread > 0) & (turn >= np.radians(MIN_WALL_TURN_DEG))
+    score = np.where(steep, product * drop, 0.0)
+    best = int(np.argmax(score))
+    if score[best] <= 0 or np.count_nonzero(past[best] > 0) < MIN_WALL_POINTS:
+        return hidden
+    return float(edges[best])
 
 
 def _faces(u: np.ndarray, w: np.ndarray, split: int, min_fraction: float) -> list | None:
