@@ -6,7 +6,7 @@ from weldseam.config import PlanConfig
 from weldseam.geometry import unit
 from weldseam.pipeline.condition import condition_points
 from weldseam.pipeline.joints import JointKind
-from weldseam.pipeline.section import FineSurface, section_params
+from weldseam.pipeline.section import FineSurface, Profile, section_params
 from weldseam.synthetic.scenes import FAMILIES, make_scan
 
 V_GROOVE = JointKind.V_GROOVE
@@ -64,3 +64,21 @@ def test_a_section_along_a_groove_wall_is_fitted_again_centred_on_the_groove():
         assert errors.mean() < 0.0004 and np.mean(errors > 0.001) < 0.08
 
 
+
+
+def test_a_fillet_with_another_surface_in_the_window_is_found_where_it_is_followed(rng):
+    """A 90-degree corner, and 14-25 mm out over its left face a plate 4 mm above the corner (a
+    flange's far part, another part's surface): in the full window the left face is no straight
+    line and nothing fits. Sought as a fillet (a seam being followed), the corner is fitted again in
+    the window half as wide, within 0.3 mm; a probe, seeking every kind, takes the full window."""
+    surface = FineSurface(np.zeros((1, 3)), cKDTree(np.zeros((1, 3))), section_params(PlanConfig()))
+    for _ in range(10):
+        reach = np.arange(0.0, 0.025, 0.0004)
+        u = np.r_[-reach, reach] / np.sqrt(2.0)
+        w = np.r_[reach, reach] / np.sqrt(2.0)
+        u, w = np.r_[u, rng.uniform(-0.025, -0.014, 60)], np.r_[w, np.full(60, 0.004)]
+        w = w + rng.normal(0.0, 0.0003, len(w))
+        profile = Profile(u, w, np.zeros(len(u)), np.zeros(3), np.array([0.0, 0.0, -1.0]), np.array([1.0, 0.0, 0.0]))
+        assert surface.fit_profile(profile).kind is None
+        followed = surface.fit_profile(profile, {JointKind.FILLET})
+        assert followed.kind == JointKind.FILLET and np.linalg.norm(followed.point_m) < 0.0003

@@ -26,6 +26,11 @@ from weldseam.pipeline.parallel import map_shared
 # in its own frame.
 RECENTRE_M = 0.003
 RECENTRE_COS = float(np.cos(np.radians(8.0)))
+# Where no joint fits a section of a seam being followed, these of its kinds are sought again in a
+# window this share as wide (FineSurface._narrow). Not the lap: in a narrow window the wall and the
+# bottom of a V-groove make the step of a lap (a 95 mm lap at a V's root, in one scene of 310).
+NARROW_SHARE = 0.5
+NARROW_KINDS = frozenset({JointKind.FILLET, JointKind.OUTSIDE_CORNER})
 
 
 @dataclass(frozen=True)
@@ -175,16 +180,34 @@ class FineSurface:
         return self.fit_profile(self.profile(centre, travel, *section_frame(travel, axis)), kinds)
 
     def fit_profile(self, profile: Profile, kinds: Collection[JointKind] | None = None) -> SectionFit:
-        """fit_profile of a section's points, in 3D; where no model fits and an inside corner may
-        be sought, an inside corner with one face unseen (one_face.one_face_corner)."""
+        """fit_profile of a section's points, in 3D; where no model fits, a fillet or outside corner
+        sought in the window half as wide (_narrow), then, where an inside corner may be sought, an
+        inside corner with one face unseen (one_face.one_face_corner)."""
         found = fit_profile(profile.u, profile.w, self.params.joints, kinds)
         if isinstance(found, ProfileFit):
             return profile.to_3d(found)
+        narrow = self._narrow(profile, kinds)
+        if narrow is not None:
+            return profile.to_3d(narrow)
         if self.view is not None and (kinds is None or JointKind.FILLET in kinds):
             corner = self._one_face(profile)
             if corner is not None:
                 return profile.to_3d(corner)
         return profile.to_3d(None, reason=found.reason)
+
+    def _narrow(self, profile: Profile, kinds: Collection[JointKind] | None) -> ProfileFit | None:
+        """The fit of the sought `kinds` of NARROW_KINDS in the window NARROW_SHARE as wide (None
+        when none is sought, or none fits there): another part's surfaces within the window (a
+        clamp, a flange's far part, the web of a joint nearby) spoil a face's line, and a corner's
+        own faces reach far enough from it to fit in the narrower one. Only where a seam of those
+        kinds is followed (the probes seek every kind, in the full window)."""
+        sought = [] if kinds is None else [kind for kind in kinds if kind in NARROW_KINDS]
+        if not sought:
+            return None
+        reach = NARROW_SHARE * self.params.half_width_m
+        near = (np.abs(profile.u) <= reach) & (np.abs(profile.w) <= reach)
+        found = fit_profile(profile.u[near], profile.w[near], self.params.joints, sought)
+        return found if isinstance(found, ProfileFit) else None
 
     def _one_face(self, profile: Profile) -> ProfileFit | None:
         toward = unit(self.view.camera_m - profile.centre)
