@@ -204,8 +204,8 @@ def _wall_edge(u, w, face, face_end: float, bottom_u: float, hidden: float) -> f
     Every point beside the edge counts: a grazing wall's points, smeared along the line of sight,
     lie within the face's noise band for a millimetre past its edge, so the face's last point in
     the band lies up to that far inside it (and the seam, on the bisector, that much too high).
-    Where no wall is seen so (fewer than 4 points past e, or none below the face), `hidden`: just
-    past the face's last point, where a hidden wall's edge lies."""
+    Where no wall is seen so (fewer than MIN_WALL_POINTS past e, or none below the face), `hidden`:
+    just past the face's last point, where a hidden wall's edge lies."""
     intercept, slope = face
     side = np.sign(face_end - bottom_u)  # the face lies this way from the bottom
     outer, inner = face_end + side * WALL_REACH_M, (face_end + bottom_u) / 2
