@@ -30,6 +30,7 @@ from weldseam.pipeline import (
     extend,
     grid,
     join,
+    nested,
     normals,
     occlusion,
     order,
@@ -270,8 +271,12 @@ def _extend(state: PlanState, c: PlanConfig) -> None:
 
 
 def _split(state: PlanState, c: PlanConfig) -> None:
-    final = split.split_seams(state.seams, state.holes, c.split, c.extend.step_m)
-    reject_lost(state, state.seams, final, Rejection.FRAGMENT)
+    """What lies inside a groove's opening is dropped first (it would split the groove), then the
+    seams are split and checked (slots, parts apart)."""
+    own = nested.outside_grooves(state.seams)
+    reject_lost(state, state.seams, own, Rejection.INSIDE_SEAM)
+    final = split.split_seams(own, state.holes, c.split, c.extend.step_m)
+    reject_lost(state, own, final, Rejection.FRAGMENT)
     in_line = slots.in_line_seams(final, state.surface, c.section.half_width_m, state.support, c.support.tolerance_m)
     reject_lost(state, final, in_line, Rejection.SLOT)
     state.seams = apart.joined_seams(in_line, state.surface)

@@ -27,10 +27,10 @@ from weldseam.pipeline.parallel import map_shared
 RECENTRE_M = 0.003
 RECENTRE_COS = float(np.cos(np.radians(8.0)))
 # Where no joint fits a section of a seam being followed, these of its kinds are sought again in a
-# window this share as wide (FineSurface._narrow). Not the lap: in a narrow window the wall and the
-# bottom of a V-groove make the step of a lap (a 95 mm lap at a V's root, in one scene of 310).
+# window this share as wide (FineSurface._narrow). In a narrow window a V-groove's wall and bottom
+# make a lap's step: nested.py drops what lies inside a groove's opening.
 NARROW_SHARE = 0.5
-NARROW_KINDS = frozenset({JointKind.FILLET, JointKind.OUTSIDE_CORNER})
+NARROW_KINDS = frozenset({JointKind.FILLET, JointKind.LAP, JointKind.OUTSIDE_CORNER})
 
 
 @dataclass(frozen=True)
@@ -180,9 +180,9 @@ class FineSurface:
         return self.fit_profile(self.profile(centre, travel, *section_frame(travel, axis)), kinds)
 
     def fit_profile(self, profile: Profile, kinds: Collection[JointKind] | None = None) -> SectionFit:
-        """fit_profile of a section's points, in 3D; where no model fits, a fillet or outside corner
-        sought in the window half as wide (_narrow), then, where an inside corner may be sought, an
-        inside corner with one face unseen (one_face.one_face_corner)."""
+        """fit_profile of a section's points, in 3D; where no model fits, a fillet, lap or outside
+        corner sought in the window half as wide (_narrow), then, where an inside corner may be
+        sought, an inside corner with one face unseen (one_face.one_face_corner)."""
         found = fit_profile(profile.u, profile.w, self.params.joints, kinds)
         if isinstance(found, ProfileFit):
             return profile.to_3d(found)
