@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from weldseam.geometry import unit
 from weldseam.pipeline.joints import JointKind
+from weldseam.pipeline.section import section_frames
 from weldseam.pipeline.trace import TracedSeam
 
 GROOVES = frozenset({JointKind.V_GROOVE, JointKind.BEVEL})
@@ -32,19 +32,17 @@ def outside_grooves(seams: list[TracedSeam]) -> list[TracedSeam]:
 
 def inside(seam: TracedSeam, groove: TracedSeam) -> bool:
     """Whether INSIDE_SHARE of `seam`'s points lie inside `groove`'s opening: at its nearest point,
-    within its half-opening across (perpendicular to its travel and its torch axis), from MARGIN_M
+    in its section frame there (section_frames: travel, torch axis, lateral; a loop's travel runs on
+    across its closing segment), within its half-opening across, from MARGIN_M
     above its opening down to DEPTH_PER_OPENING times its opening along its torch axis, and within
     MARGIN_M of it along its travel."""
     if len(groove.positions_m) < 2:
         return False
     nearest = cKDTree(groove.positions_m).query(seam.positions_m)[1]
-    travel = unit(np.gradient(groove.positions_m, axis=0))[nearest]
-    axis = groove.torch_axes[nearest]
+    frames = section_frames(groove.positions_m, groove.torch_axes, groove.closed)
     offset = seam.positions_m - groove.positions_m[nearest]
-    along = np.einsum("ij,ij->i", offset, travel)
-    depth = np.einsum("ij,ij->i", offset, axis)
-    across = np.linalg.norm(offset - along[:, None] * travel - depth[:, None] * axis, axis=1)
+    along, depth, across = (np.einsum("ij,ij->i", offset, frame[nearest]) for frame in frames)
     opening = 2 * groove.half_opening_m
-    within = (across <= groove.half_opening_m) & (depth >= -MARGIN_M) & (depth <= DEPTH_PER_OPENING * opening)
+    within = (np.abs(across) <= groove.half_opening_m) & (depth >= -MARGIN_M) & (depth <= DEPTH_PER_OPENING * opening)
     within &= np.abs(along) <= MARGIN_M + float(np.linalg.norm(np.diff(groove.positions_m, axis=0), axis=1).max())
     return np.count_nonzero(within) >= INSIDE_SHARE * len(seam.positions_m)
