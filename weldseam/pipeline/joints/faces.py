@@ -212,7 +212,7 @@ def straight_faces(u: np.ndarray, w: np.ndarray) -> tuple[Face, Face, float] | s
         return "too few points for two faces"
     sums = np.cumsum(np.column_stack([np.ones(n), u, w, u * u, u * w, w * w]), axis=0)
     left_sums = sums[splits - 1]
-    error = _line_error(left_sums) + _line_error(sums[-1] - left_sums)
+    error = line_sse(left_sums) + line_sse(sums[-1] - left_sums)
     best = int(np.argmin(error))
     split = int(splits[best])
     faces = []
@@ -228,7 +228,7 @@ def straight_faces(u: np.ndarray, w: np.ndarray) -> tuple[Face, Face, float] | s
     return faces[0], faces[1], float(np.sqrt(max(error[best], 0.0) / n))
 
 
-def _line_error(sums: np.ndarray) -> np.ndarray:
+def line_sse(sums: np.ndarray) -> np.ndarray:
     """Residual sum of squares of the least-squares line w(u) through each segment, from its sums
     (rows: 1, u, w, u^2, uw, w^2)."""
     count, su, sw, suu, suw, sww = sums.T

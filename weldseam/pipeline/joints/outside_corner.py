@@ -23,6 +23,7 @@ import numpy as np
 
 from weldseam.geometry import unit
 from weldseam.pipeline.joints.base import JointGeometry, JointKind, NoFit, ProfileFit
+from weldseam.pipeline.joints.faces import line_sse
 from weldseam.pipeline.joints.profile import SortedProfile
 from weldseam.pipeline.joints.robust import fraction, line, median, middle, noise, parabola, parabola_at, upper_decile
 
@@ -305,15 +306,5 @@ def _best_break(u: np.ndarray, w: np.ndarray) -> int | None:
         return None
     sums = np.cumsum(np.column_stack([np.ones(n), u, w, u * u, u * w, w * w]), axis=0)
     left = sums[splits - 1]
-    error = _line_error(left) + _line_error(sums[-1] - left)
+    error = line_sse(left) + line_sse(sums[-1] - left)
     return int(splits[int(np.argmin(error))])
-
-
-def _line_error(sums: np.ndarray) -> np.ndarray:
-    """Residual sum of squares of the least-squares line through points, from their sums
-    [1, u, w, uu, uw, ww] (one row per point set): Cww - Cuw^2 / Cuu with centred sums."""
-    count, su, sw, suu, suw, sww = sums.T
-    var_u = suu - su * su / count
-    cov = suw - su * sw / count
-    var_w = sww - sw * sw / count
-    return var_w - np.divide(cov * cov, var_u, out=np.zeros_like(cov), where=var_u > 1e-12)
