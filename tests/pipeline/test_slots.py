@@ -12,7 +12,7 @@ from tests.conftest import planned_broad_case, rejected_gaps_to_fixtures_m
 from weldseam.config import PlanConfig
 from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.section import FineSurface, section_params
-from weldseam.pipeline.slots import gap_to_table, in_line_seams, sides_apart, slot
+from weldseam.pipeline.slots import gap_to_table, in_line_seams, out_of_line, sides_apart, slot
 from weldseam.pipeline.trace import TracedSeam
 
 REACH_M = PlanConfig().section.half_width_m
@@ -218,3 +218,15 @@ def test_a_square_butt_down_to_the_table_is_kept(rng, joint):
                              (0.03, 0.008)])  # fmt: skip
     seam = replace(groove_seam(0.0, 0.008, 0.00075), joint=joint)
     assert not gap_to_table(seam, surface, TABLE, 0.002)
+
+
+def test_sides_are_out_of_line_only_when_the_median_clears_the_limit_by_its_own_noise():
+    """A real bar's 24-37 mm groove leaves 14 mm of side in the window: its sections' steps scatter
+    over 0-8 mm about a 2.1 mm median, within its standard error of the 2 mm limit. A clamp's slot
+    steps 3 mm at every section."""
+    bar_turns = [8.3, 8.5, 12.1, 14.1, 12.8, 11.0, 5.1, 3.5, 18.8, 7.4, 10.7, 8.6, 6.0]
+    bar_steps = np.array([0.2, 3.6, 2.4, 2.0, 1.0, 3.6, 2.1, 5.3, 0.0, 8.4, 1.2, 1.4, 3.4]) / 1000
+    assert not out_of_line(np.column_stack([bar_turns, bar_steps]))
+    slot_steps = np.array([3.0, 3.2, 2.9, 3.1, 3.0, 2.8, 3.3]) / 1000
+    assert out_of_line(np.column_stack([np.full(7, 2.0), slot_steps]))
+    assert out_of_line(np.column_stack([[14.0, 15.5, 13.0, 16.0, 14.5], np.zeros(5)])), "turned 13-16 degrees"

@@ -60,9 +60,8 @@ def in_line_seams(
 
 def slot(seam: TracedSeam, surface: FineSurface, reach_m: float) -> bool:
     """Whether a butt joint's sides are out of line: over up to SIDE_SAMPLES sections along it (in
-    the seam's own frames, its edges half its opening each side of it), the median of the turn
-    between its sides (sides_apart) exceeds MAX_SIDE_TURN_DEG or the median of the step between
-    them at the seam exceeds MAX_SIDE_STEP_M, with at least MIN_MEASURED sections measured."""
+    the seam's own frames, its edges half its opening each side of it), the turn and the step
+    between its sides (sides_apart) are out_of_line, with at least MIN_MEASURED sections measured."""
     if seam.joint not in BUTT_JOINTS:
         return False
     travel, axes, lateral = section_frames(seam.positions_m, seam.torch_axes, seam.closed)
@@ -74,9 +73,18 @@ def slot(seam: TracedSeam, surface: FineSurface, reach_m: float) -> bool:
         sides = sides_apart(profile.u, profile.w, -half, half, reach_m)
         if sides is not None:
             apart.append(sides)
-    if len(apart) < MIN_MEASURED:
-        return False
-    turn_deg, step_m = np.median(apart, axis=0)
+    return len(apart) >= MIN_MEASURED and out_of_line(np.array(apart))
+
+
+def out_of_line(apart: np.ndarray) -> bool:
+    """Whether sections' (turn (degrees), step (m)) between a groove's sides (n, 2) put them out of
+    line: the median turn over MAX_SIDE_TURN_DEG or the median step over MAX_SIDE_STEP_M, by more
+    than the median's standard error, 1.2533 x 1.4826 x MAD / sqrt(n). A groove wider than half the
+    section window leaves 14 mm of side beside it or less, and its steps scatter over millimetres
+    (a real bar's 24-37 mm groove: 0-8 mm, median 2.1 mm +- 0.6); a clamp's slot steps alike."""
+    middle = np.median(apart, axis=0)
+    error = 1.2533 * 1.4826 * np.median(np.abs(apart - middle), axis=0) / np.sqrt(len(apart))
+    turn_deg, step_m = middle - error
     return bool(turn_deg > MAX_SIDE_TURN_DEG or step_m > MAX_SIDE_STEP_M)
 
 
