@@ -9,7 +9,7 @@ from weldseam.geometry import polyline_length
 from weldseam.pipeline.ends import end_curve, seam_line
 from weldseam.pipeline import ends, extend
 from weldseam.pipeline.extend import extend_seam, extend_seams
-from weldseam.pipeline.holes import HOLE_EDGE_M, hole_aim
+from weldseam.pipeline.holes import HOLE_EDGE_M, _arrival, _bridge, hole_aim, hole_aims
 from weldseam.pipeline.parallel import worker_process
 from weldseam.pipeline.section import PointFlag, SectionFit
 from weldseam.pipeline.seek import Extension
@@ -284,6 +284,50 @@ def test_an_extension_crosses_a_short_hole_after_fits_that_lean_at_its_edge(rng)
     beyond = positions[(positions[:, 0] > -0.03) & (positions[:, 0] < -0.01)]
     assert len(beyond) >= 8 and np.abs(beyond[:, 1:]).max() < 0.001, "found on the groove beyond the hole"
     assert positions[:, 0].max() > -0.008, "on to the plate end"
+
+
+def test_a_hole_is_sought_straight_on_where_the_ends_curve_and_the_curve_before_its_edge_disagree():
+    """The end's curve bends with the fits that lean at the hole's edge, the curve before the edge
+    does not: 50 mm ahead they lie too far apart for a fit to match both, the bend is no seam's,
+    and their tangents are the aims, straight on. Along a ring both curves agree, and are the aims."""
+    seam = leaning_end_trace().positions_m
+    leaning = end_curve(seam)
+    aims = hole_aims(seam[-1], *leaning, seam, 0.05)
+    assert len(aims) == 2 and not aims[0][2].any() and not aims[1][2].any()
+    assert np.allclose(aims[0][1], leaning[0]) and np.allclose(aims[1][1], hole_aim(seam)[1])
+    ring = ring_arc(0.0, np.pi).positions_m
+    curves = hole_aims(ring[-1], *end_curve(ring), ring, 0.05)
+    assert len(curves) == 2 and all(np.linalg.norm(bend) > 0.9 / RING_RADIUS_M for _, _, bend in curves)
+
+
+def test_a_groove_is_not_carried_across_a_hole_to_a_square_butts_gap_in_line(rng):
+    """A V-groove (x < -0.045), 30 mm without data, then a square butt's 1.5 mm gap in line, its
+    far wall seen obliquely: the V-groove's model fits that gap too (one wall, no flank), but fitted
+    for every joint the section there is the butt, and the groove does not go on to it."""
+    x, y = grid((-0.08, 0.0), (-0.03, 0.03))
+    groove, butt = x < -0.045, x > -0.015
+    kept = groove | (butt & (np.abs(y) > 0.00075))
+    points = np.column_stack([x, y, np.where(groove, -v_depth(y), 0.0)])[kept]
+    wall_x, wall_z = grid((-0.015, 0.0), (-0.005, 0.0))
+    wall = np.column_stack([wall_x, 0.00075 + 0.4 * wall_z, wall_z])
+    points = np.vstack([points, wall]) + rng.normal(0, 0.0001, (len(points) + len(wall), 3))
+    positions = extended(straight_trace(-0.075, -0.055, [0.0, 0.0, -1.0]), points)
+    assert positions[:, 0].max() < -0.04
+
+
+def test_a_hole_on_a_straight_aim_is_bridged_along_it_not_the_lean_of_the_first_two_fits_beyond_it():
+    """The first fits beyond a 36 mm hole lean 14 degrees (0.5 mm over a step, as fits do at a hole's
+    edge); the curve across, its tangents as long as the hole, would bulge 1.3 mm off the seam
+    arriving along them. Found along a straight aim, it arrives along that line and stays on it."""
+    far = np.column_stack([np.full(4, 0.5), np.arange(4.0), np.zeros(4)])  # no scan point near the hole
+    extension = Extension(surface_of(far), JointKind.V_GROOVE, replace(ExtendConfig(), step_m=STEP_M))
+    down = np.array([0.0, 0.0, -1.0])
+    run = [SectionFit(JointKind.V_GROOVE, np.array([0.036, 0.0, 0.0]), down),
+           SectionFit(JointKind.V_GROOVE, np.array([0.038, 0.0005, 0.0]), down)]
+    along = np.array([1.0, 0.0, 0.0])
+    fits = _bridge(extension, np.zeros(3), down, along, run, _arrival(run, along, np.zeros(3)))
+    bridged = np.array([fit.point_m for fit in fits if fit.bridged])
+    assert len(bridged) >= 15 and np.abs(bridged[:, 1]).max() < 0.0002
 
 
 @pytest.mark.parametrize("with_worker", [False, True])

@@ -38,7 +38,7 @@ from weldseam.pipeline.ends import (
 from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.parallel import map_shared
 from weldseam.pipeline.section import FineSurface, PointFlag, SectionFit, section_frames
-from weldseam.pipeline.holes import across_hole, hole_aim, hole_of
+from weldseam.pipeline.holes import across_hole, hole_aims, hole_of
 from weldseam.pipeline.seek import Extension, next_fit
 from weldseam.pipeline.tacks import across_tack
 from weldseam.pipeline.turn import turned_run
@@ -371,10 +371,10 @@ def _part_end_step(extension: Extension, end: SeamEnd) -> Step | None:
 def _hole_step(extension: Extension, end: SeamEnd) -> Step | None:
     """The seam carried across a hole in the scan over the whole seam (holes.across_hole), up to
     max_hole_m long, aimed along the end's curve and along the curve of the fits before the
-    hole's edge."""
+    hole's edge, or where these disagree, along the tangent of each (holes.hole_aims)."""
     direction, _ = end.heading()
-    aims = [(end.positions[-1], direction, end.bend), hole_aim(end.fitted)]
-    fits = across_hole(extension, end.positions[-1], end.axes[-1], [aim for aim in aims if aim is not None])
+    aims = hole_aims(end.positions[-1], direction, end.bend, end.fitted, extension.params.max_hole_m)
+    fits = across_hole(extension, end.positions[-1], end.axes[-1], aims)
     return None if fits is None else Step(fits, hole=hole_of(end.positions[-1], fits))
 
 

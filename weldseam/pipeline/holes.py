@@ -8,8 +8,8 @@ import numpy as np
 from weldseam.geometry import arc_lengths, polyline_length, unit
 from weldseam.pipeline.bridge import groove_bottom, sees_past_end
 from weldseam.pipeline.ends import ahead, end_curve, offsets
-from weldseam.pipeline.joints import JointGeometry, JointKind
-from weldseam.pipeline.section import FineSurface, PointFlag, SectionFit
+from weldseam.pipeline.joints import JointGeometry, JointKind, one_joint, recentred
+from weldseam.pipeline.section import RECENTRE_M, FineSurface, PointFlag, SectionFit
 from weldseam.pipeline.seek import Extension, next_fit, plain_fit
 from weldseam.pipeline.trace import Hole
 
@@ -22,6 +22,10 @@ HOLE_STRAYS = 2
 # HOLE_STRAYS of its points) is hidden behind something, a clamp or a bar over the seam, not lost
 # in a hole: a torch sent along it would run into what hides it.
 OCCLUDER_MARGIN_M = 0.005
+# A fit beyond a hole is the seam within this share of its distance ahead sideways of an aim's
+# prediction (and DEPTH_SHARE in depth).
+SIDEWAYS_SHARE = 0.25
+DEPTH_SHARE = 0.05
 # A hole's edge cuts the sections beside it short (one groove wall seen, the other not), so the
 # fits within this much arc of it may lean sideways: a hole is aimed across from the fits before.
 HOLE_EDGE_M = 0.006
@@ -37,39 +41,60 @@ def hole_aim(fitted: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | 
     return (before[-1], *end_curve(before)) if len(before) >= 3 else None
 
 
+def hole_aims(last_point, direction, bend, fitted: np.ndarray, reach_m: float) -> list:
+    """The aims (origin, direction, bend) to seek the seam along across a hole after `last_point`:
+    the end's curve (`direction`, `bend`) and the curve from before the hole's edge (hole_aim); where
+    these two disagree by more than SIDEWAYS_SHARE of `reach_m` at that distance ahead (no fit
+    beyond could match both), their bend is no seam's, and their tangents are the aims, straight.
+    A bend fitted near an end (up to 1 / ends.MIN_BEND_RADIUS_M) moves its prediction d^2 / 2R
+    sideways, 27 mm at 40 mm ahead, where a straight seam goes straight on; and the curve across
+    the hole leaves along the aim."""
+    curves = [aim for aim in ((last_point, direction, bend), hole_aim(fitted)) if aim is not None]
+    if len(curves) < 2:
+        return curves
+    leads = [max(0.0, float((last_point - origin) @ tangent)) for origin, tangent, _ in curves]
+    (first, _), (second, _) = (ahead(*aim, lead + reach_m) for aim, lead in zip(curves, leads))
+    if np.linalg.norm(first - second) <= SIDEWAYS_SHARE * reach_m:
+        return curves
+    return [(origin, tangent, np.zeros(3)) for origin, tangent, _ in curves]
+
+
 def across_hole(extension: Extension, last_point, last_axis, aims) -> list[SectionFit] | None:
     """Bridged points across a hole in the scan after `last_point` followed by the first
     HOLE_CONFIRM fits beyond it, or None.
 
-    Sections are tried from max_skip_m to max_hole_m ahead of the end along the curve of the
-    first of `aims` (origin, direction, bend: ends.ahead from the origin, the end's distance from
-    it added). The first section that fits the joint within 25 % of its distance sideways and 5 %
-    in depth of any aim's prediction (the fits at a hole's edge may lean, and the aim from before
-    them finds the seam where the end's own tangent misses it: hole_aim) must be followed by
-    HOLE_CONFIRM - 1 more fits in a row, or by the part's end (_part_ends_after): a hole can reach
-    to within a section or two of the plate's end, and the scan then sees past the plate right
-    after the fits (a stray fit inside a longer hole has nothing after it). The hole is bridged by
-    a cubic Hermite curve between the two ends and their travel directions on that aim (torch axes
-    interpolated), and that curve must be empty: no more than HOLE_STRAYS scan points within
-    HOLE_RADIUS_M of it. For a groove the seam point is the centre of the opening, in the air over
-    the groove; where a plate's surface crosses the line, the groove has ended, and one ahead is
-    another seam."""
+    Sections are tried from max_skip_m to max_hole_m ahead of the end along the curve of each of
+    `aims` in turn (origin, direction, bend: ends.ahead from the origin, the end's distance from
+    it added). The first section that fits the joint (and is no other kind's, fitted for every
+    joint: _same_joint) within SIDEWAYS_SHARE of its distance sideways and DEPTH_SHARE in depth of
+    any aim's prediction (the fits at a hole's edge may lean, and the aim from before them finds
+    the seam where the end's own tangent misses it: hole_aim) must be followed by HOLE_CONFIRM - 1
+    more fits in a row, or by the part's end (_part_ends_after): a hole can reach to within a
+    section or two of the plate's end, and the scan then sees past the plate right after the fits
+    (a stray fit inside a longer hole has nothing after it). The hole is bridged by a cubic
+    Hermite curve between the two ends, leaving along the aim whose prediction lies nearest the
+    fit (_arrival: how it arrives; torch axes interpolated), and that curve must be empty: no more
+    than HOLE_STRAYS scan points within HOLE_RADIUS_M of it. For a groove the seam point is the
+    centre of the opening, in the air over the groove; where a plate's surface crosses the line,
+    the groove has ended, and one ahead is another seam."""
     params = extension.params
     step = params.step_m
     leads = [max(0.0, float((last_point - origin) @ direction)) for origin, direction, _ in aims]
     for distance in np.arange(params.max_skip_m + step, params.max_hole_m + step / 2, step):
-        predicted, travel = ahead(*aims[0], leads[0] + distance)
-        fit = plain_fit(extension, predicted, travel, last_axis)
-        if fit.kind != extension.joint:
+        found = _fit_ahead(extension, aims, leads, distance, last_axis)
+        if found is None or not _same_joint(extension, *found):
             continue
-        for (origin, direction, bend), lead in zip(aims, leads):
-            predicted, travel = ahead(origin, direction, bend, lead + distance)
+        fit = found[0]
+        near = []
+        for aim, lead in zip(aims, leads):
+            predicted, travel = ahead(*aim, lead + distance)
             depth, sideways = offsets(fit.point_m, predicted, travel, last_axis)
-            if sideways <= 0.25 * distance and depth <= max(0.5 * step, 0.05 * distance):
-                break
-        else:
+            if sideways <= SIDEWAYS_SHARE * distance and depth <= max(0.5 * step, DEPTH_SHARE * distance):
+                near.append((sideways, aim, lead, travel))
+        if not near:
             continue
-        leaving = ahead(origin, direction, bend, lead)[1]  # the aim's travel at the end
+        _, (origin, direction, bend), lead, travel = min(near, key=lambda candidate: candidate[0])
+        leaving = ahead(origin, direction, bend, lead)[1]  # the nearest aim's travel at the end
         run = [fit]
         while len(run) < HOLE_CONFIRM:
             following = next_fit(extension, run[-1].point_m, run[-1].torch_axis, (travel, bend))
@@ -78,16 +103,53 @@ def across_hole(extension: Extension, last_point, last_axis, aims) -> list[Secti
             run.append(following)
         if len(run) < HOLE_CONFIRM and not _part_ends_after(extension, run[-1], travel, last_point, last_axis, leaving):
             return None
-        return _bridge(extension, last_point, last_axis, leaving, run, travel)
+        return _bridge(extension, last_point, last_axis, leaving, run, _arrival(run, travel, bend))
     return None
 
 
-def _bridge(extension: Extension, last_point, last_axis, leaving, run: list[SectionFit], travel):
+def _fit_ahead(extension: Extension, aims, leads, distance: float, last_axis) -> tuple[SectionFit, np.ndarray] | None:
+    """(fit, travel) of the first fit of the extension's joint in the sections `distance` ahead along
+    each aim (in turn), or None. A prediction near one tried before is not tried again: within
+    section.RECENTRE_M for a joint whose fit does not assume it in the window's middle (a section
+    there finds the same corner), within half a step for one that does (joints.recentred)."""
+    same = RECENTRE_M if not recentred(extension.joint) else extension.params.step_m / 2
+    tried = []
+    for aim, lead in zip(aims, leads):
+        predicted, travel = ahead(*aim, lead + distance)
+        if any(np.linalg.norm(predicted - other) <= same for other in tried):
+            continue
+        tried.append(predicted)
+        fit = plain_fit(extension, predicted, travel, last_axis)
+        if fit.kind == extension.joint:
+            return fit, travel
+    return None
+
+
+def _same_joint(extension: Extension, fit: SectionFit, travel: np.ndarray) -> bool:
+    """Whether the section of a fit beyond a hole (across `travel`, in the fit's frame), fitted for
+    every joint, is the seam's joint or its kin (joints.one_joint): where a groove's model fits a
+    square butt's gap seen obliquely (one wall, no flank), the joint there is the butt, and the
+    groove does not go on across the hole to it."""
+    found = extension.surface.fit(fit.point_m, travel, fit.torch_axis)
+    return found.kind is not None and one_joint(found.kind, extension.joint)
+
+
+def _arrival(run: list[SectionFit], travel: np.ndarray, bend: np.ndarray) -> np.ndarray:
+    """The direction the seam arrives along at the first fit beyond a hole: along a straight aim
+    (no `bend`), its `travel`, the tangent of ends.TANGENT_BASELINE_M of seam (two fits at a hole's
+    edge, 2 mm apart, may lean 15 degrees, and the curve across has tangents as long as the hole);
+    along a curve, from the first fit of `run` to its last (the aim's parabola turns off a ring's
+    tangent by 5 degrees 35 mm out)."""
+    if not bend.any() or len(run) < 2:
+        return travel
+    return unit(run[-1].point_m - run[0].point_m)
+
+
+def _bridge(extension: Extension, last_point, last_axis, leaving, run: list[SectionFit], arrival):
     """The bridged points from `last_point` (leaving along `leaving`) to the first fit of `run`
-    on a cubic Hermite curve, then `run`; None when scan points lie on that curve or something
-    in front of it hides it (hidden)."""
+    (arriving along `arrival`) on a cubic Hermite curve, then `run`; None when scan points lie on
+    that curve or something in front of it hides it (hidden)."""
     fit = run[0]
-    arrival = unit(run[-1].point_m - run[0].point_m) if len(run) > 1 else travel
     line = hermite(last_point, leaving, fit.point_m, arrival, HOLE_RADIUS_M)
     if extension.surface.tree.query_ball_point(line, HOLE_RADIUS_M, return_length=True).sum() > HOLE_STRAYS:
         return None
