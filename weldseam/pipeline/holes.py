@@ -52,8 +52,7 @@ def hole_aims(last_point, direction, bend, fitted: np.ndarray, reach_m: float) -
     curves = [aim for aim in ((last_point, direction, bend), hole_aim(fitted)) if aim is not None]
     if len(curves) < 2:
         return curves
-    leads = [max(0.0, float((last_point - origin) @ tangent)) for origin, tangent, _ in curves]
-    (first, _), (second, _) = (ahead(*aim, lead + reach_m) for aim, lead in zip(curves, leads))
+    (first, _), (second, _) = _predictions(curves, _leads(last_point, curves), reach_m)
     if np.linalg.norm(first - second) <= SIDEWAYS_SHARE * reach_m:
         return curves
     return [(origin, tangent, np.zeros(3)) for origin, tangent, _ in curves]
@@ -79,15 +78,15 @@ def across_hole(extension: Extension, last_point, last_axis, aims) -> list[Secti
     the groove has ended, and one ahead is another seam."""
     params = extension.params
     step = params.step_m
-    leads = [max(0.0, float((last_point - origin) @ direction)) for origin, direction, _ in aims]
+    leads = _leads(last_point, aims)
     for distance in np.arange(params.max_skip_m + step, params.max_hole_m + step / 2, step):
-        found = _fit_ahead(extension, aims, leads, distance, last_axis)
+        predictions = _predictions(aims, leads, distance)
+        found = _fit_ahead(extension, predictions, last_axis)
         if found is None or not _same_joint(extension, *found):
             continue
         fit = found[0]
         near = []
-        for aim, lead in zip(aims, leads):
-            predicted, travel = ahead(*aim, lead + distance)
+        for aim, lead, (predicted, travel) in zip(aims, leads, predictions):
             depth, sideways = offsets(fit.point_m, predicted, travel, last_axis)
             if sideways <= SIDEWAYS_SHARE * distance and depth <= max(0.5 * step, DEPTH_SHARE * distance):
                 near.append((sideways, aim, lead, travel))
@@ -107,15 +106,24 @@ def across_hole(extension: Extension, last_point, last_axis, aims) -> list[Secti
     return None
 
 
-def _fit_ahead(extension: Extension, aims, leads, distance: float, last_axis) -> tuple[SectionFit, np.ndarray] | None:
-    """(fit, travel) of the first fit of the extension's joint in the sections `distance` ahead along
-    each aim (in turn), or None. A prediction near one tried before is not tried again: within
+def _leads(last_point, aims) -> list[float]:
+    """How far (m) `last_point` lies ahead of each aim's origin along its direction (0 behind it)."""
+    return [max(0.0, float((last_point - origin) @ direction)) for origin, direction, _ in aims]
+
+
+def _predictions(aims, leads, distance: float) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(predicted point, travel) of each aim `distance` on from the end (ends.ahead, its lead added)."""
+    return [ahead(*aim, lead + distance) for aim, lead in zip(aims, leads)]
+
+
+def _fit_ahead(extension: Extension, predictions, last_axis) -> tuple[SectionFit, np.ndarray] | None:
+    """(fit, travel) of the first fit of the extension's joint in the sections at the aims'
+    `predictions` (in turn), or None. A prediction near one tried before is not tried again: within
     section.RECENTRE_M for a joint whose fit does not assume it in the window's middle (a section
     there finds the same corner), within half a step for one that does (joints.recentred)."""
     same = RECENTRE_M if not recentred(extension.joint) else extension.params.step_m / 2
     tried = []
-    for aim, lead in zip(aims, leads):
-        predicted, travel = ahead(*aim, lead + distance)
+    for predicted, travel in predictions:
         if any(np.linalg.norm(predicted - other) <= same for other in tried):
             continue
         tried.append(predicted)

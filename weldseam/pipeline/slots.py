@@ -30,6 +30,7 @@ import numpy as np
 
 from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.section import FineSurface, SectionFit, section_frame, section_frames
+from weldseam.pipeline.segment import noise_floor
 from weldseam.pipeline.trace import TracedSeam
 
 BUTT_JOINTS = frozenset({JointKind.V_GROOVE, JointKind.BEVEL, JointKind.SQUARE_BUTT})
@@ -79,11 +80,12 @@ def slot(seam: TracedSeam, surface: FineSurface, reach_m: float) -> bool:
 def out_of_line(apart: np.ndarray) -> bool:
     """Whether sections' (turn (degrees), step (m)) between a groove's sides (n, 2) put them out of
     line: the median turn over MAX_SIDE_TURN_DEG or the median step over MAX_SIDE_STEP_M, by more
-    than the median's standard error, 1.2533 x 1.4826 x MAD / sqrt(n). A groove wider than half the
-    section window leaves 14 mm of side beside it or less, and its steps scatter over millimetres
-    (a real bar's 24-37 mm groove: 0-8 mm, median 2.1 mm +- 0.6); a clamp's slot steps alike."""
+    than the median's standard error, 1.2533 x 1.4826 x MAD / sqrt(n) (segment.noise_floor). A
+    groove wider than half the section window leaves 14 mm of side beside it or less, and its steps
+    scatter over millimetres (a real bar's 24-37 mm groove: 0-8 mm, median 2.1 mm +- 0.6); a
+    clamp's slot steps alike."""
     middle = np.median(apart, axis=0)
-    error = 1.2533 * 1.4826 * np.median(np.abs(apart - middle), axis=0) / np.sqrt(len(apart))
+    error = np.array([noise_floor(column, 1.2533) for column in apart.T]) / np.sqrt(len(apart))
     turn_deg, step_m = middle - error
     return bool(turn_deg > MAX_SIDE_TURN_DEG or step_m > MAX_SIDE_STEP_M)
 
