@@ -92,6 +92,10 @@ class SegmentConfig:
         True, "a single view: also take surface ends past which the camera sees a wall's top (a T-joint seen from "
         "above, its web's face too oblique to measure) as candidates"
     )
+    gaps: bool = _param(
+        True, "a single view: also take lines of missing pixels between two surfaces (a square butt's narrow "
+        "opening, which bends nothing) as candidates, seeking square butts alone"
+    )
     cluster_tolerance_m: float = _param(0.006, "Euclidean clustering distance between seam points")
     min_seam_length_m: float = _param(0.02, "candidate creases shorter than this are not traced")
 

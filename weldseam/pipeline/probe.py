@@ -12,6 +12,7 @@ import itertools
 import numpy as np
 
 from weldseam.geometry import even_indices, polyline_length, unit
+from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.order import Chain
 from weldseam.pipeline.section import FineSurface, SectionFit, section_frames
 
@@ -36,25 +37,28 @@ def approximate_torch_axes(centres: list[np.ndarray], normals, tree, radius_m) -
 
 
 def probe_chains(
-    chains: list[Chain], approx_axes: list[np.ndarray], surface: FineSurface, min_length_m: float = 0.0
+    chains: list[Chain], approx_axes: list[np.ndarray], surface: FineSurface,
+    sought: list[frozenset[JointKind] | None] | None = None, min_length_m: float = 0.0,
 ) -> list[dict[int, SectionFit]]:
-    """For each chain, the fits of PROBE_SECTIONS evenly spaced sections along it, by chain point
-    index, in the frames trace_chain uses (so it reuses them); none for a chain shorter than
-    `min_length_m` (the trace rejects it unprobed)."""
-    probes = []
-    for chain, axes in zip(chains, approx_axes):
+    """For each chain, the fits of PROBE_SECTIONS evenly spaced sections along it seeking its
+    `sought` kinds (None: any kind, for one chain or all), by chain point index, in the frames trace_chain uses (so it
+    reuses them); none for a chain shorter than `min_length_m` (the trace rejects it unprobed).
+    One batch per distinct `sought`."""
+    sought = [None] * len(chains) if sought is None else sought
+    frames = {}
+    for k, (chain, axes) in enumerate(zip(chains, approx_axes)):
         if polyline_length(chain.points, chain.closed) < min_length_m:
-            probes.append((np.empty(0, int), None))
             continue
         travel, frame_axes, lateral = section_frames(chain.points, axes, chain.closed)
         at = even_indices(len(chain.points), PROBE_SECTIONS)
-        probes.append((at, (chain.points[at], travel[at], frame_axes[at], lateral[at])))
-    framed = [frame for _, frame in probes if frame is not None]
-    if not framed:
-        return [{} for _ in probes]
-    frames = (np.concatenate(part) for part in zip(*framed))
-    fits = iter(surface.fit_many(*frames))
-    return [{int(k): next(fits) for k in at} for at, _ in probes]
+        frames[k] = (at, (chain.points[at], travel[at], frame_axes[at], lateral[at]))
+    probes = [{} for _ in chains]
+    for kinds in dict.fromkeys(sought[k] for k in frames):
+        batch = [k for k in frames if sought[k] == kinds]
+        fits = iter(surface.fit_many(*(np.concatenate(part) for part in zip(*(frames[k][1] for k in batch))), kinds))
+        for k in batch:
+            probes[k] = {int(index): next(fits) for index in frames[k][0]}
+    return probes
 
 
 def tracing_order(chain: Chain, probes: dict[int, SectionFit]) -> tuple:

@@ -28,6 +28,7 @@ from weldseam.pipeline import (
     descriptor,
     direction,
     extend,
+    gaps,
     grid,
     join,
     nested,
@@ -47,6 +48,7 @@ from weldseam.pipeline import (
     trace,
 )
 from weldseam.pipeline.candidates import Rejection
+from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.neighbours import pairs_among, pairs_graph, query_workers, radius_pairs
 from weldseam.pipeline.parallel import in_background, worker_process
 from weldseam.pipeline.section import FineSurface, PointFlag, pose_confidence, section_params
@@ -54,6 +56,8 @@ from weldseam.pipeline.state import Dump, PlanState, chain_candidate, dump_seams
 from weldseam.types import RunResult, Scan, WeldPath
 
 MIN_POINTS = 100
+# A line of missing pixels between two surfaces is only a square butt's opening (gaps).
+GAP_KINDS = frozenset({JointKind.SQUARE_BUTT})
 # The fine tree answers the sections' 25 mm balls (~2000 points each): with big leaves and
 # uncompacted nodes it is built in 33 ms instead of 58 and answers 600 balls in 107 ms, not 125.
 FINE_TREE_LEAF_SIZE = 128
@@ -63,9 +67,12 @@ def _condition(state: PlanState, c: PlanConfig) -> None:
     """Finite points in the crop box merged into fine voxels (the surface the sections read) and
     working voxels (the neighbourhood steps), isolated working points dropped."""
     scan = state.scan
-    state.fine = condition.condition_points(
-        scan.points_m, voxel_m=c.condition.voxel_m, crop_min_m=c.condition.crop_min_m, crop_max_m=c.condition.crop_max_m
-    )
+    valid = condition.valid_points(scan.points_m, crop_min_m=c.condition.crop_min_m, crop_max_m=c.condition.crop_max_m)
+    if c.segment.gaps and scan.camera_origin_m is not None and np.shape(scan.camera_origin_m) == (3,):
+        # A single view's image, searched for thin gaps (_segment makes them candidates).
+        state.gap_middles = gaps.gap_midpoints(valid, np.asarray(scan.camera_origin_m, float),
+                                               max_width_m=c.joints.gap_max_m)  # fmt: skip
+    state.fine = grid.voxel_centroids(valid, c.condition.voxel_m)
     if len(state.fine) < MIN_POINTS:
         raise InputError(f"{scan.source}: only {len(state.fine)} valid points (finite, inside the crop box)")
     # The sections' search tree over the fine cloud is built on the other core meanwhile.
@@ -111,7 +118,8 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
     """The candidates: bands where the descriptor exceeds the automatic threshold (or
     segment.threshold), and, apart from them, the valleys and the ridges where the signed bend
     exceeds its own (a groove's ridge never joins a plate's edge: on a narrow part the descriptor's
-    bands merge). Clusters too short are recorded as rejected. The table under the part (_support)
+    bands merge), and the lines of thin gaps in a single view's image (gaps; sought as square
+    butts alone). Clusters too short are recorded as rejected. The table under the part (_support)
     is found here from the unbent points, before the worker forks (_probe): found after, its 8 MB of
     temporaries would land on pages shared with the worker, each then copied."""
     state.threshold = c.segment.threshold
@@ -139,6 +147,13 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
         found, too_short = _clusters(state, c, rims)
         state.creases += found
         short += too_short
+    if state.gap_middles is not None:
+        # Lines of them only: a round dropout's middles make a speck, which is no candidate.
+        middles = state.gap_middles
+        found, _ = segment.cluster_candidates(middles, np.ones(len(middles), bool),
+                                              tolerance_m=c.segment.cluster_tolerance_m,
+                                              min_length_m=c.segment.min_seam_length_m)  # fmt: skip
+        state.gaps = [middles[members] for members in found]
     state.short_candidates = [replace(candidates.cluster_candidate(state.working[members]), rejection=Rejection.TOO_SHORT)
                               for members in short]  # fmt: skip
     state.working_tree = cKDTree(state.working)
@@ -194,6 +209,7 @@ def _pairing(state: PlanState, c: PlanConfig) -> None:
         state.centre_points.append(midpoints)
         state.dump("pairing", midpoints, None)
     state.centre_points += [state.working[members] for members in state.creases]
+    state.centre_points += state.gaps
     state.centre_points += [segment.band_points(state.working[members], c.segment) for members in state.wide_valleys]
 
 
@@ -219,21 +235,24 @@ def _order(state: PlanState, c: PlanConfig) -> None:
 
 
 def _probe(state: PlanState, c: PlanConfig) -> None:
-    """A few sections on every chain (the first step on the fine surface: the worker process
-    that shares its sections starts here and stays until the run ends)."""
+    """A few sections on every chain, seeking the kinds its source can show (a gap's: GAP_KINDS;
+    the first step on the fine surface: the worker process that shares its sections starts here
+    and stays until the run ends)."""
     state.surface = FineSurface(state.fine, state.fine_tree.result(), section_params(c), state.view)
     state.resources.enter_context(worker_process(state.surface))
     state.approx_axes = probe.approximate_torch_axes(
         [chain.points for chain in state.chains], state.normals, state.working_tree, c.joints.face_radius_m
     )
-    state.probes = probe.probe_chains(state.chains, state.approx_axes, state.surface, min_length_m=c.grid.leaf_m)
+    gaps_from = len(state.clusters) + len(state.creases)
+    sought = [GAP_KINDS if gaps_from <= k < gaps_from + len(state.gaps) else None for k in state.chain_cluster]
+    state.probes = probe.probe_chains(state.chains, state.approx_axes, state.surface, sought, min_length_m=c.grid.leaf_m)
 
 
 def _trace(state: PlanState, c: PlanConfig) -> None:
     """The chains on the seams their probes find first (probe.tracing_order; wide valleys' last), each
     traced; a chain within face_radius / 2 of the opening of a groove traced before is skipped. The
     pieces are then taken in chain order."""
-    chains, wide = state.chains, len(state.clusters) + len(state.creases)
+    chains, wide = state.chains, len(state.clusters) + len(state.creases) + len(state.gaps)
     by_length = sorted(range(len(chains)), key=lambda k: (state.chain_cluster[k] >= wide,
                                                           probe.tracing_order(chains[k], state.probes[k])))
     pieces: dict[int, list[trace.TracedSeam]] = {}

@@ -37,6 +37,7 @@ class PlanState:
     fine_tree: object = None
     working: np.ndarray | None = None
     working_camera: np.ndarray | None = None
+    gap_middles: object = None
     graphs: dict = field(default_factory=dict)
     offsets_by_radius: dict = field(default_factory=dict)
     # normals, descriptor, segment, support
@@ -47,6 +48,7 @@ class PlanState:
     valley_threshold: float | None = None
     clusters: list = field(default_factory=list)
     creases: list = field(default_factory=list)
+    gaps: list = field(default_factory=list)
     wide_valleys: list = field(default_factory=list)
     view: occlusion.ViewBuffer | None = None
     working_tree: object = None

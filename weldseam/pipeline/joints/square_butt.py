@@ -35,7 +35,10 @@ from weldseam.pipeline.joints.robust import line, median, one_plane, upper_decil
 KIND = JointKind.SQUARE_BUTT
 # The surface line is fitted to the outer halves of the window: the opening must sit in its middle.
 CENTRED = True
-MIN_LENGTH_M = 0.0
+# Two plates' butt runs their length between their corners; a shorter straight opening is a strip of a
+# sensor's dropout between two stretches of one surface (missing pixels that return nothing, as a
+# gap does).
+MIN_LENGTH_M = 0.05
 SPECIALISES = None
 UNIQUE_RATIO = 1.3
 # Openings are sought this close to the window's centre: sections are centred on the joint (an

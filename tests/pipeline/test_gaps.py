@@ -1,0 +1,103 @@
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from weldseam.config import PlanConfig
+from weldseam.pipeline.gaps import gap_midpoints, image_directions, sensor_grid
+from weldseam.pipeline.run import plan_paths
+from weldseam.types import Scan
+
+FOCAL_PX = 600.0
+
+
+def look_at(camera, target, roll_rad):
+    """Rows x, y, z of a camera frame looking from `camera` at `target`, rolled about its axis."""
+    z = target - camera
+    z /= np.linalg.norm(z)
+    x = np.cross([0.0, 0.0, 1.0], z)
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    c, s = np.cos(roll_rad), np.sin(roll_rad)
+    return np.stack([c * x + s * y, -s * x + c * y, z])
+
+
+def render_plates(camera, roll_rad, gap_m, rng, size_px=(480, 640), noise_m=0.0005, table_m=None):
+    """A pinhole sensor's points of two plates in z = 0 (|y| < 0.1, |x| < 0.08) with an opening
+    |x - 0.01| < gap_m / 2 between them that returns nothing (a gap too narrow for a stereo
+    match), depth noise along the rays; where `table_m` is given, a table that far below them
+    (|x|, |y| < 0.2) seen around them."""
+    frame = look_at(camera, np.zeros(3), roll_rad)
+    rows, cols = np.mgrid[0:size_px[0], 0:size_px[1]]
+    rays = np.column_stack([(cols.ravel() - size_px[1] / 2) / FOCAL_PX, (rows.ravel() - size_px[0] / 2) / FOCAL_PX,
+                            np.ones(rows.size)]) @ frame
+    hits = camera - (camera[2] / rays[:, 2])[:, None] * rays
+    plates = (np.abs(hits[:, 0]) < 0.08) & (np.abs(hits[:, 1]) < 0.1)
+    seen = plates & (np.abs(hits[:, 0] - 0.01) >= gap_m / 2)
+    if table_m is not None:
+        below = camera - ((camera[2] + table_m) / rays[:, 2])[:, None] * rays
+        table = ~plates & (np.abs(below[:, 0]) < 0.2) & (np.abs(below[:, 1]) < 0.2)
+        hits[table] = below[table]
+        seen |= table
+    unit_rays = rays[seen] / np.linalg.norm(rays[seen], axis=1, keepdims=True)
+    return hits[seen] + rng.normal(0.0, noise_m, (np.count_nonzero(seen), 1)) * unit_rays
+
+
+def grid_of(camera, roll_deg):
+    points = render_plates(camera, np.radians(roll_deg), 0.0, np.random.default_rng(0))
+    return sensor_grid(image_directions(points, camera))
+
+
+def quarter_turn_off(angle_deg: float) -> float:
+    """How far an angle lies from a multiple of 90 degrees."""
+    return abs((angle_deg + 45.0) % 90.0 - 45.0)
+
+
+@pytest.mark.parametrize("roll_deg", [17.0, 40.0])
+def test_the_sensor_grid_is_its_pixel_pitch_and_turns_with_its_roll(roll_deg):
+    camera = np.array([0.05, -0.25, 0.45])
+    pitch, angle = grid_of(camera, roll_deg)
+    assert pitch == pytest.approx(1 / FOCAL_PX, rel=0.05)
+    _, upright = grid_of(camera, 0.0)
+    assert quarter_turn_off(np.degrees(angle - upright) - roll_deg) < 2.0
+
+
+def test_a_cloud_with_no_pixel_grid_has_no_sensor_grid():
+    rng = np.random.default_rng(1)
+    points = np.column_stack([rng.uniform(-0.1, 0.1, 50_000), rng.uniform(-0.1, 0.1, 50_000), np.zeros(50_000)])
+    assert sensor_grid(image_directions(points, np.array([0.0, 0.0, 0.5]))) is None
+    assert gap_midpoints(points, np.array([0.0, 0.0, 0.5]), max_width_m=0.004).shape == (0, 3)
+
+
+@pytest.mark.parametrize("roll_deg, gap_m", [(0.0, 0.0015), (25.0, 0.0012), (62.0, 0.003)])
+def test_the_middles_of_a_thin_gap_lie_in_it_along_its_length(roll_deg, gap_m):
+    """Seen from 0.55 m, 30 degrees off the plate normal: a 1.2-3 mm opening is 1.5-4 pixels wide."""
+    camera = np.array([0.0, -0.28, 0.47])
+    points = render_plates(camera, np.radians(roll_deg), gap_m, np.random.default_rng(2))
+    middles = gap_midpoints(points, camera, max_width_m=0.004)
+    in_gap = np.abs(middles[:, 0] - 0.01) <= gap_m / 2 + 0.001
+    assert np.count_nonzero(in_gap) >= 0.9 * len(middles)
+    # Along the whole opening, a middle at least every 5 mm.
+    along = np.sort(middles[in_gap, 1])
+    assert along[0] < -0.09 and along[-1] > 0.09 and np.diff(along).max() < 0.005
+
+
+def test_a_plate_without_an_opening_has_no_line_of_middles():
+    camera = np.array([0.0, -0.28, 0.47])
+    points = render_plates(camera, np.radians(25.0), 0.0, np.random.default_rng(3))
+    assert len(gap_midpoints(points, camera, max_width_m=0.004)) < 10
+
+
+@pytest.mark.parametrize("gap_m, roll_deg, camera", [(0.0015, 25.0, (0.0, -0.3, 0.55)), (0.0012, 60.0, (0.1, -0.25, 0.5))])
+def test_a_square_butt_seen_only_as_missing_pixels_is_planned(gap_m, roll_deg, camera):
+    """Two plates on a table, their 1.2-1.5 mm opening returning nothing: it bends no surface,
+    and only the gap candidates find it. The path runs the opening's length, within 0.5 mm of it."""
+    camera = np.array(camera)
+    points = render_plates(camera, np.radians(roll_deg), gap_m, np.random.default_rng(5), table_m=0.006)
+    scan = Scan(points_m=points, camera_origin_m=camera, source="plates")
+    (path,) = plan_paths(scan, PlanConfig(), allow_empty=True).paths
+    assert path.joint == "square_butt"
+    assert np.abs(path.positions_m[:, 0] - 0.01).max() < 0.0005 and np.abs(path.positions_m[:, 2]).max() < 0.0005
+    assert path.positions_m[:, 1].min() < -0.095 and path.positions_m[:, 1].max() > 0.095
+    without = replace(PlanConfig(), segment=replace(PlanConfig().segment, gaps=False))
+    assert not plan_paths(scan, without, allow_empty=True).paths
