@@ -186,6 +186,22 @@ def test_a_square_gap_is_found_where_the_pitch_is_as_wide_as_the_gap_but_not_els
     assert missed == 40 and found >= 36
 
 
+def test_an_opening_the_image_shows_need_not_stand_out_of_the_lattice():
+    """Where the sensor's image shows a gap (a line of pixels that returned nothing), an opening
+    there only as wide as the widest of the lattice's own is the gap; without it, or with it
+    elsewhere, it is not."""
+    rng = np.random.default_rng(4)
+    shown = unshown = elsewhere = 0
+    for _ in range(30):  # a 0.8 mm gap in a 1 mm lattice jittered by 0.25 mm
+        u = np.sort(np.arange(-0.025, 0.025, 0.001) + rng.normal(0, 0.00025, 50))
+        u, w = square_gap(u, rng.normal(0, 0.0003, len(u)), 0.0, 0.0008)
+        unshown += isinstance(fit_profile(u, w, PARAMS, {SQUARE_BUTT}), ProfileFit)
+        elsewhere += isinstance(fit_profile(u, w, PARAMS, {SQUARE_BUTT}, np.array([0.006])), ProfileFit)
+        fit = fit_profile(u, w, PARAMS, {SQUARE_BUTT}, np.array([-0.0002, 0.0003]))
+        shown += isinstance(fit, ProfileFit) and abs(fit.u) < 0.0005
+    assert shown >= 18 and unshown <= 10 and elsewhere == unshown
+
+
 def oblique_square_gap(rng, gap):
     """A square butt seen obliquely: the plates' surface (w = 0) with the gap |u| < gap / 2 unseen,
     and its far wall (u = gap / 2) seen from the surface 4 mm down, the near wall hidden."""

@@ -82,3 +82,17 @@ def test_a_fillet_with_another_surface_in_the_window_is_found_where_it_is_follow
         assert surface.fit_profile(profile).kind is None
         followed = surface.fit_profile(profile, {JointKind.FILLET})
         assert followed.kind == JointKind.FILLET and np.linalg.norm(followed.point_m) < 0.0003
+
+
+def test_a_section_shows_the_image_openings_near_its_plane():
+    """Gap middles along a line y = 0.002 (x every mm) and one 10 mm along elsewhere: a section
+    across x at the origin reads the u of those within 3 mm of its plane, and nothing without any."""
+    points = np.column_stack([np.random.default_rng(0).uniform(-0.03, 0.03, (4000, 2)), np.zeros(4000)])
+    middles = np.vstack([np.column_stack([np.arange(-20, 21) / 1000, np.full(41, 0.002), np.zeros(41)]),
+                         [[0.01, -0.005, 0.0]]])
+    surface = FineSurface(points, cKDTree(points), section_params(PlanConfig()), None, cKDTree(middles))
+    travel, axis = np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.0, -1.0])
+    lateral = np.cross(travel, axis)
+    openings = surface.profile(np.zeros(3), travel, axis, lateral).openings_u
+    assert len(openings) == 7 and np.allclose(openings, 0.002 * (lateral @ [0.0, 1.0, 0.0]))
+    assert len(surface_of(points).profile(np.zeros(3), travel, axis, lateral).openings_u) == 0

@@ -238,7 +238,8 @@ def _probe(state: PlanState, c: PlanConfig) -> None:
     """A few sections on every chain, seeking the kinds its source can show (a gap's: GAP_KINDS;
     the first step on the fine surface: the worker process that shares its sections starts here
     and stays until the run ends)."""
-    state.surface = FineSurface(state.fine, state.fine_tree.result(), section_params(c), state.view)
+    openings = cKDTree(np.vstack(state.gaps)) if state.gaps else None
+    state.surface = FineSurface(state.fine, state.fine_tree.result(), section_params(c), state.view, openings)
     state.resources.enter_context(worker_process(state.surface))
     state.approx_axes = probe.approximate_torch_axes(
         [chain.points for chain in state.chains], state.normals, state.working_tree, c.joints.face_radius_m

@@ -17,6 +17,7 @@ import numpy as np
 from weldseam.config import JointsConfig, PlanConfig
 from weldseam.geometry import unit
 from weldseam.pipeline.joints import JointGeometry, JointKind, ProfileFit, akin, fit_profile, recentred
+from weldseam.pipeline.joints.profile import NO_OPENINGS
 from weldseam.pipeline.occlusion import ViewBuffer
 from weldseam.pipeline.one_face import one_face_corner
 from weldseam.pipeline.parallel import map_shared
@@ -31,6 +32,9 @@ RECENTRE_COS = float(np.cos(np.radians(8.0)))
 # make a lap's step: nested.py drops what lies inside a groove's opening.
 NARROW_SHARE = 0.5
 NARROW_KINDS = frozenset({JointKind.FILLET, JointKind.LAP, JointKind.OUTSIDE_CORNER})
+# A gap's middles lie one per pixel row or column crossing it (~1 mm apart along it): those within
+# this of a section's plane are the openings it shows there.
+OPENING_ALONG_M = 0.003
 
 
 @dataclass(frozen=True)
@@ -108,7 +112,8 @@ class SectionFit:
 @dataclass(frozen=True)
 class Profile:
     """The points of one section: u lateral, w height out of the work, along the offset along the
-    seam (m), each (N,); and the section's frame: centre, travel, torch axis, lateral (3,)."""
+    seam (m), each (N,); the section's frame: centre, travel, torch axis, lateral (3,); and the u
+    (m) of the openings the sensor's image shows at the section (FineSurface.openings)."""
 
     u: np.ndarray
     w: np.ndarray
@@ -116,6 +121,7 @@ class Profile:
     centre: np.ndarray
     axis: np.ndarray
     lateral: np.ndarray
+    openings_u: np.ndarray = field(default_factory=lambda: NO_OPENINGS)
 
     def to_3d(self, fit: ProfileFit | None, bridged: bool = False, reason: str = "") -> SectionFit:
         """The SectionFit of a profile fit (None: no fit) in this section's frame."""
@@ -132,13 +138,15 @@ class Profile:
 @dataclass(frozen=True, eq=False)
 class FineSurface:
     """The fine cloud (N, 3) with its search tree (a cKDTree over it) and the section parameters:
-    what every cross-section reads. While a parallel.worker_process holds this object, fit_many
-    shares its batches with the worker."""
+    what every cross-section reads; the single camera's view (occlusion.ViewBuffer) and a cKDTree
+    over the middles of the thin gaps its image shows (gaps.gap_midpoints), or None. While a
+    parallel.worker_process holds this object, fit_many shares its batches with the worker."""
 
     points: np.ndarray
     tree: object
     params: SectionParams
     view: ViewBuffer | None = None
+    openings: object = None
 
     def sight(self, profile: Profile, u: float, w: float, along: float = 0.0) -> tuple[float, float, float] | None:
         """(u, w, along) of the wall top the camera sees past the profile point (u, w) moved `along`
@@ -172,7 +180,16 @@ class FineSurface:
             thick = inside & (np.abs(along) <= self.params.slab_m)
             if balanced(along[thick]):
                 keep = thick
-        return Profile(u[keep], w[keep], along[keep], centre, axis, lateral)
+        return Profile(u[keep], w[keep], along[keep], centre, axis, lateral, self._openings_u(centre, travel, axis, lateral))
+
+    def _openings_u(self, centre, travel, axis, lateral) -> np.ndarray:
+        """The u of the gap middles within OPENING_ALONG_M of the section plane and the window."""
+        if self.openings is None:
+            return NO_OPENINGS
+        members = self.openings.query_ball_point(centre, self.params.half_width_m, return_sorted=True)
+        offsets = self.openings.data[members] - centre
+        near = (np.abs(offsets @ travel) <= OPENING_ALONG_M) & (np.abs(offsets @ axis) <= self.params.half_width_m)
+        return offsets[near] @ lateral
 
     def fit(self, centre, travel, axis, kinds: Collection[JointKind] | None = None) -> SectionFit:
         """The joint in the section at `centre` across `travel`, with `axis` made perpendicular
@@ -183,7 +200,7 @@ class FineSurface:
         """fit_profile of a section's points, in 3D; where no model fits, a fillet, lap or outside
         corner sought in the window half as wide (_narrow), then, where an inside corner may be
         sought, an inside corner with one face unseen (one_face.one_face_corner)."""
-        found = fit_profile(profile.u, profile.w, self.params.joints, kinds)
+        found = fit_profile(profile.u, profile.w, self.params.joints, kinds, profile.openings_u)
         if isinstance(found, ProfileFit):
             return profile.to_3d(found)
         narrow = self._narrow(profile, kinds)

@@ -20,7 +20,7 @@ import numpy as np
 from weldseam.config import JointsConfig
 from weldseam.pipeline.joints import bevel, fillet, lap, outside_corner, square_butt, v_groove
 from weldseam.pipeline.joints.base import JointGeometry, JointKind, NoFit, ProfileFit, outline_residual
-from weldseam.pipeline.joints.profile import SortedProfile
+from weldseam.pipeline.joints.profile import NO_OPENINGS, SortedProfile
 
 __all__ = ["MODELS", "JointGeometry", "JointKind", "NoFit", "ProfileFit", "SortedProfile", "akin", "fit_profile", "min_length_m", "one_joint", "recentred"]
 
@@ -43,10 +43,12 @@ FLANKED = frozenset({JointKind.V_GROOVE, JointKind.BEVEL})
 
 
 def fit_profile(
-    u: np.ndarray, w: np.ndarray, params: JointsConfig, kinds: Collection[JointKind] | None = None
+    u: np.ndarray, w: np.ndarray, params: JointsConfig, kinds: Collection[JointKind] | None = None,
+    openings_u: np.ndarray = NO_OPENINGS,
 ) -> ProfileFit | NoFit:
     """The joint in one profile (u lateral, w height out of the work, m), or NoFit with every
-    model's reason; `kinds`: only these models are tried (None: all). Of the models that fit, the
+    model's reason; `kinds`: only these models are tried (None: all); `openings_u`: where the
+    sensor's image shows an opening in the section (SortedProfile). Of the models that fit, the
     one whose outline lies closest to the profile's points around its seam (outline_residual,
     within face_radius_m + half its opening) is the joint, its residual_m that distance; on a tie,
     the first in MODELS. A fit of a kind that SPECIALISES the closest one's kind, within
@@ -54,7 +56,7 @@ def fit_profile(
     square butt fit against a V-groove or bevel that measured no flank (see SQUARE_OPENING)."""
     if len(u) < MIN_PROFILE_POINTS:
         return NoFit("too few points in the section")
-    profile = SortedProfile.of(u, w, params)
+    profile = SortedProfile.of(u, w, params, openings_u)
     u, w = profile.u, profile.w
     reasons, fits = [], []
     for model in MODELS:

@@ -5,7 +5,7 @@ asked.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 from typing import NamedTuple
 
@@ -20,6 +20,9 @@ from weldseam.pipeline.joints.robust import line, noise
 # and the next 1 mm below; the median deviation is then ~0 and that level would pass for a
 # depression. 1 mm / sqrt(12) = 0.29 mm.
 SURFACE_NOISE_FLOOR_M = 0.0003
+# No opening known in a section (read-only: every profile without one shares it).
+NO_OPENINGS = np.empty(0)
+NO_OPENINGS.flags.writeable = False
 
 
 class PlateSurface(NamedTuple):
@@ -38,17 +41,20 @@ class PlateSurface(NamedTuple):
 @dataclass(frozen=True, eq=False)
 class SortedProfile:
     """One section's points, u (N,) lateral and ascending, w (N,) height out of the work (m), with
-    the joint models' parameters; every model of one section reads the same value."""
+    the joint models' parameters, and the u (m) of the openings the sensor's image shows across
+    the section (a square butt's gap returning no pixels: gaps.gap_midpoints; none known: empty);
+    every model of one section reads the same value."""
 
     u: np.ndarray
     w: np.ndarray
     params: JointsConfig
+    openings_u: np.ndarray = field(default_factory=lambda: NO_OPENINGS)
 
     @classmethod
-    def of(cls, u: np.ndarray, w: np.ndarray, params: JointsConfig) -> SortedProfile:
+    def of(cls, u: np.ndarray, w: np.ndarray, params: JointsConfig, openings_u: np.ndarray = NO_OPENINGS) -> SortedProfile:
         """The profile of points (u, w) in any order (a stable sort by u)."""
         order = np.argsort(u, kind="stable")
-        return cls(u[order], w[order], params)
+        return cls(u[order], w[order], params, openings_u)
 
     @cached_property
     def surface(self) -> PlateSurface | NoFit:

@@ -8,7 +8,8 @@ dropout along the gap) or lies deeper than the surface (the table or the far sid
 gap, its walls), never above it. It is the widest opening between neighbouring surface points
 within `face_radius_m` (a wider one beside it is the joint: a groove's opening, with a wall's
 points just inside it), and one through which nothing deeper was seen (no deeper point within
-SEEN_THROUGH_M of it) at least UNIQUE_RATIO x as wide as any other there: one
+SEEN_THROUGH_M of it) and where the sensor's image shows no opening (a line of pixels that
+returned nothing: gaps.py) at least UNIQUE_RATIO x as wide as any other there: one
 pixel lattice leaves openings of one pitch everywhere on a plate (on our own scenes, 1.3-3 mm gaps
 seen from 0.4-0.7 m, sections within 0.7 mm of the gap fit 70 % of the time, random sections on
 plain surfaces 3.4 %; the trace needs most sections of a chain to agree, and consistent seam
@@ -66,7 +67,7 @@ def fit(profile: SortedProfile) -> ProfileFit | NoFit:
     if isinstance(surface, NoFit):
         return surface
     intercept, slope, on_surface, residual, depth_limit, sigma = surface
-    found = _opening(u, residual, on_surface, params)
+    found = _opening(u, residual, on_surface, profile.openings_u, params)
     if isinstance(found, NoFit):
         return found
     u_left, u_right = found
@@ -94,7 +95,7 @@ def fit(profile: SortedProfile) -> ProfileFit | NoFit:
                       geometry, tuple(zip(outline_u.tolist(), outline_w.tolist())))  # fmt: skip
 
 
-def _opening(u, residual, on_surface, params: JointsConfig):
+def _opening(u, residual, on_surface, openings_u, params: JointsConfig):
     """(u_left, u_right) of the opening nearest the window's centre (see the module), or NoFit."""
     rims = np.flatnonzero(on_surface)
     if len(rims) < 2 * MIN_SIDE_POINTS:
@@ -109,10 +110,17 @@ def _opening(u, residual, on_surface, params: JointsConfig):
             continue
         others = np.abs(middle - middle[k]) <= params.face_radius_m
         others[k] = False
-        ratio = 1.0 if _seen_through(u, residual, on_surface, left, right) else UNIQUE_RATIO
+        shown = _seen_through(u, residual, on_surface, left, right) or _in_image(u, left, right, openings_u)
+        ratio = 1.0 if shown else UNIQUE_RATIO
         if spacing[k] >= ratio * spacing[others].max(initial=0.0):
             return float(u[left]), float(u[right])
     return NoFit("no opening of joints.gap_min_m..gap_max_m in the surface")
+
+
+def _in_image(u, left: int, right: int, openings_u: np.ndarray) -> bool:
+    """Whether the sensor's image shows an opening (SortedProfile.openings_u) within
+    SEEN_THROUGH_M of the one between the surface points `left` and `right` (indices)."""
+    return bool(np.any((openings_u >= u[left] - SEEN_THROUGH_M) & (openings_u <= u[right] + SEEN_THROUGH_M)))
 
 
 def _seen_through(u, residual, on_surface, left: int, right: int) -> bool:
