@@ -114,6 +114,12 @@ def _opening(u, residual, on_surface, openings_u, params: JointsConfig):
         ratio = 1.0 if shown else UNIQUE_RATIO
         if spacing[k] >= ratio * spacing[others].max(initial=0.0):
             return float(u[left]), float(u[right])
+    # Where the fine cloud's lattice hides the gap among openings as wide, the image's opening is it:
+    # the one most of the section's image openings lie in.
+    for k in sorted(wide, key=lambda k: abs(middle[k])):
+        inside = (openings_u >= u[rims[k]] - SEEN_THROUGH_M) & (openings_u <= u[rims[k + 1]] + SEEN_THROUGH_M)
+        if np.count_nonzero(inside) > len(openings_u) / 2:
+            return float(u[rims[k]]), float(u[rims[k + 1]])
     return NoFit("no opening of joints.gap_min_m..gap_max_m in the surface")
 
 
