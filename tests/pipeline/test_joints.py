@@ -202,6 +202,24 @@ def test_an_opening_the_image_shows_need_not_stand_out_of_the_lattice():
     assert shown >= 18 and unshown <= 10 and elsewhere == unshown
 
 
+def test_where_the_lattice_hides_the_gap_the_opening_most_image_openings_lie_in_is_it():
+    """A 0.6 mm gap in a 0.8 mm lattice jittered by 0.3 mm is rarely the widest opening there. Most
+    of the section's image openings lying in it make it the gap; image openings scattered over the
+    section's other openings add nothing."""
+    rng = np.random.default_rng(7)
+    concentrated = alone = scattered = 0
+    for _ in range(30):
+        u = np.sort(np.arange(-0.025, 0.025, 0.0008) + rng.normal(0, 0.0003, 63))
+        u, w = square_gap(u, rng.normal(0, 0.0003, len(u)), 0.0, 0.0006)
+        fit = fit_profile(u, w, PARAMS, {SQUARE_BUTT})
+        alone += isinstance(fit, ProfileFit) and abs(fit.u) < 0.0006
+        fit = fit_profile(u, w, PARAMS, {SQUARE_BUTT}, np.array([-0.02, -0.011, 0.007, 0.018]))
+        scattered += isinstance(fit, ProfileFit) and abs(fit.u) < 0.0006
+        fit = fit_profile(u, w, PARAMS, {SQUARE_BUTT}, np.array([-0.0001, 0.0001, 0.0002, 0.009]))
+        concentrated += isinstance(fit, ProfileFit) and abs(fit.u) < 0.0006
+    assert concentrated >= 25 and alone <= 10 and scattered <= alone
+
+
 def oblique_square_gap(rng, gap):
     """A square butt seen obliquely: the plates' surface (w = 0) with the gap |u| < gap / 2 unseen,
     and its far wall (u = gap / 2) seen from the surface 4 mm down, the near wall hidden."""
