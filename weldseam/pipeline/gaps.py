@@ -64,7 +64,7 @@ def gap_midpoints(points: np.ndarray, camera_m: np.ndarray, *, max_width_m: floa
     image = owner.reshape(rows, columns)
     middles = []
     for lines in (image, image.T):
-        flat = lines.ravel()
+        flat = _with_neighbour_lines(lines).ravel()
         filled = np.flatnonzero(flat >= 0)
         length = lines.shape[1]
         first, second = filled[:-1], filled[1:]
@@ -76,6 +76,16 @@ def gap_midpoints(points: np.ndarray, camera_m: np.ndarray, *, max_width_m: floa
         narrow = width <= max_width_m + 2 * footprint
         middles.append((ends_a[narrow] + ends_b[narrow]) / 2)
     return np.vstack(middles)
+
+
+def _with_neighbour_lines(lines: np.ndarray) -> np.ndarray:
+    """The image `lines` (rows of bins holding a point's index, -1 where empty) with each empty
+    bin taking the point of the bin above it, else below it: a pixel that noise in its direction
+    put into the next line of bins fills no line's run with a false gap (a run is empty in three
+    lines at once), while a gap, a line across the lines, leaves all three empty."""
+    above, below = np.full_like(lines, -1), np.full_like(lines, -1)
+    above[1:], below[:-1] = lines[:-1], lines[1:]
+    return np.where(lines >= 0, lines, np.where(above >= 0, above, below))
 
 
 def image_directions(points: np.ndarray, camera_m: np.ndarray) -> np.ndarray:
