@@ -113,15 +113,12 @@ def report(
 def _candidates(placed, config):
     """(working cloud (M, 3), its descriptor (M,), the candidates' points (C, 3)) of the placed
     scans: the pipeline's steps up to `segment` only (several frames merged first, as plan does)."""
-    import numpy as np
-
     from weldseam.pipeline.frames import merged_scan
     from weldseam.pipeline.run import run_steps
 
     scan = placed.frames[0] if len(placed.frames) == 1 else merged_scan(placed.frames, config, source=placed.source)[0]
     state = run_steps(scan, config, last="segment")
-    chosen = [*state.clusters, *state.creases]
-    return state.working, state.descriptor, state.working[np.concatenate(chosen)] if chosen else np.empty((0, 3))
+    return state.working, state.descriptor, state.candidate_points()
 
 
 def _mismatches(placed, record: dict, path_file: str) -> list[str]:

@@ -161,8 +161,7 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
         state.support = support.find_support_plane(state.working, state.descriptor <= state.threshold,
                                                    state.working_camera, tolerance_m=c.support.tolerance_m,
                                                    below_fraction=c.support.below_fraction)  # fmt: skip
-    chosen = [*state.clusters, *state.creases, *state.wide_valleys]
-    state.dump("segment", state.working[np.concatenate(chosen)] if chosen else np.empty((0, 3)), None)
+    state.dump("segment", state.candidate_points(), None)
 
 
 def _clusters(state: PlanState, c: PlanConfig, selected: np.ndarray):

@@ -69,6 +69,13 @@ class PlanState:
     # resample
     paths: list[WeldPath] = field(default_factory=list)
 
+    def candidate_points(self) -> np.ndarray:
+        """(C, 3) the points of every candidate segment found: the descriptor's bands, the valleys
+        and ridges, the wide valleys (working points) and the lines of thin gaps (their middles)."""
+        chosen = [*self.clusters, *self.creases, *self.wide_valleys]
+        parts = ([self.working[np.concatenate(chosen)]] if chosen else []) + list(self.gaps)
+        return np.vstack(parts) if parts else np.empty((0, 3))
+
     def neighbourhoods(self, radius_m: float):
         """One radius graph of the working cloud per distinct radius: smoothing moves points by
         well under a voxel, so the neighbourhoods found before it still hold after it."""
