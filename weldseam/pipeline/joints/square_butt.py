@@ -8,8 +8,8 @@ dropout along the gap) or lies deeper than the surface (the table or the far sid
 gap, its walls), never above it. It is the widest opening between neighbouring surface points
 within `face_radius_m` (a wider one beside it is the joint: a groove's opening, with a wall's
 points just inside it), and one through which nothing deeper was seen (no deeper point within
-SEEN_THROUGH_M of it) and where the sensor's image shows no opening (a line of pixels that
-returned nothing: gaps.py) at least UNIQUE_RATIO x as wide as any other there: one
+SEEN_THROUGH_M of it) at least UNIQUE_RATIO x as wide as any other there, or one the sensor's
+image shows (a line of pixels that returned nothing crossing the section there: gaps.py): one
 pixel lattice leaves openings of one pitch everywhere on a plate (on our own scenes, 1.3-3 mm gaps
 seen from 0.4-0.7 m, sections within 0.7 mm of the gap fit 70 % of the time, random sections on
 plain surfaces 3.4 %; the trace needs most sections of a chain to agree, and consistent seam
@@ -110,23 +110,23 @@ def _opening(u, residual, on_surface, openings_u, params: JointsConfig):
             continue
         others = np.abs(middle - middle[k]) <= params.face_radius_m
         others[k] = False
-        shown = _seen_through(u, residual, on_surface, left, right) or _in_image(u, left, right, openings_u)
-        ratio = 1.0 if shown else UNIQUE_RATIO
+        ratio = 1.0 if _seen_through(u, residual, on_surface, left, right) else UNIQUE_RATIO
         if spacing[k] >= ratio * spacing[others].max(initial=0.0):
             return float(u[left]), float(u[right])
-    # Where the fine cloud's lattice hides the gap among openings as wide, the image's opening is it:
-    # the one most of the section's image openings lie in.
+    # Where the fine cloud's lattice hides the gap among openings as wide, the image's opening is it.
     for k in sorted(wide, key=lambda k: abs(middle[k])):
-        inside = (openings_u >= u[rims[k]] - SEEN_THROUGH_M) & (openings_u <= u[rims[k + 1]] + SEEN_THROUGH_M)
-        if np.count_nonzero(inside) > len(openings_u) / 2:
+        if _in_image(u, rims[k], rims[k + 1], openings_u):
             return float(u[rims[k]]), float(u[rims[k + 1]])
     return NoFit("no opening of joints.gap_min_m..gap_max_m in the surface")
 
 
 def _in_image(u, left: int, right: int, openings_u: np.ndarray) -> bool:
-    """Whether the sensor's image shows an opening (SortedProfile.openings_u) within
-    SEEN_THROUGH_M of the one between the surface points `left` and `right` (indices)."""
-    return bool(np.any((openings_u >= u[left] - SEEN_THROUGH_M) & (openings_u <= u[right] + SEEN_THROUGH_M)))
+    """Whether the sensor's image shows the opening between the surface points `left` and `right`
+    (indices): most of the section's image openings (SortedProfile.openings_u) lie within
+    SEEN_THROUGH_M of it. A surface seen grazing misses pixels all over, and its sections hold
+    image openings all across."""
+    inside = (openings_u >= u[left] - SEEN_THROUGH_M) & (openings_u <= u[right] + SEEN_THROUGH_M)
+    return np.count_nonzero(inside) > len(openings_u) / 2
 
 
 def _seen_through(u, residual, on_surface, left: int, right: int) -> bool:
