@@ -8,15 +8,17 @@ dropout along the gap) or lies deeper than the surface (the table or the far sid
 gap, its walls), never above it. It is the widest opening between neighbouring surface points
 within `face_radius_m` (a wider one beside it is the joint: a groove's opening, with a wall's
 points just inside it), and one through which nothing deeper was seen (no deeper point within
-SEEN_THROUGH_M of it) at least UNIQUE_RATIO x as wide as any other there, or one the sensor's
-image shows (a line of pixels that returned nothing crossing the section there: gaps.py): one
+SEEN_THROUGH_M of it) at least UNIQUE_RATIO x as wide as any other there: one
 pixel lattice leaves openings of one pitch everywhere on a plate (on our own scenes, 1.3-3 mm gaps
 seen from 0.4-0.7 m, sections within 0.7 mm of the gap fit 70 % of the time, random sections on
 plain surfaces 3.4 %; the trace needs most sections of a chain to agree, and consistent seam
 points). Counting what was seen just beside the rims raised the sections on the gap that fit,
 in the broad world's noisy scans, from 55 to 87 % (square_butt_3) and from 46 to 64 %
-(square_butt_2), and left random sections on flat plates at 0.7-4 %. The two sides each hold a
-plate surface, and lines fitted to them agree (one plane: a step or a bend is no gap).
+(square_butt_2), and left random sections on flat plates at 0.7-4 %. Failing that, it is the
+opening the sensor's image shows, however wide the lattice's others: the one holding most of the
+section's image openings (where lines of pixels that returned nothing cross it: gaps.py). The two
+sides each hold a plate surface, and lines fitted to them agree (one plane: a step or a bend is no
+gap).
 
 The seam point is the opening's centre on the reference line, u = (u_left + u_right) / 2; the
 torch axis is perpendicular to the reference line fitted within `face_radius_m` beside the
