@@ -61,6 +61,8 @@ COPLANAR_RAD = np.radians(8.0)
 # far wall stands at one rim, and the fine cloud's 1 mm voxels merge its top with the surface
 # beside it, so its deeper points lie up to a voxel beyond the rim rather than between the rims.
 SEEN_THROUGH_M = 0.001
+# An opening the image shows is the gap only where it spans this many of the lattice's median steps.
+LATTICE_STEPS = 1.5
 
 
 def fit(profile: SortedProfile) -> ProfileFit | NoFit:
@@ -115,9 +117,11 @@ def _opening(u, residual, on_surface, openings_u, params: JointsConfig):
         ratio = 1.0 if _seen_through(u, residual, on_surface, left, right) else UNIQUE_RATIO
         if spacing[k] >= ratio * spacing[others].max(initial=0.0):
             return float(u[left]), float(u[right])
-    # Where the fine cloud's lattice hides the gap among openings as wide, the image's opening is it.
+    # Where the fine cloud's lattice hides the gap among openings as wide, the image's opening is it,
+    # where the lattice's own step is finer (sparse points far off or grazing resolve no gap).
+    step = median(spacing)
     for k in sorted(wide, key=lambda k: abs(middle[k])):
-        if _in_image(u, rims[k], rims[k + 1], openings_u):
+        if spacing[k] >= LATTICE_STEPS * step and _in_image(u, rims[k], rims[k + 1], openings_u):
             return float(u[rims[k]]), float(u[rims[k + 1]])
     return NoFit("no opening of joints.gap_min_m..gap_max_m in the surface")
 
