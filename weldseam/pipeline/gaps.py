@@ -19,10 +19,9 @@ from scipy.spatial import cKDTree
 
 from weldseam.geometry import column_bounds, unit
 
-# Bins per sensor pixel: at half the pitch each pixel falls in a bin of its own even where the
-# binning's frame is tilted off the sensor's (a pixel grid a degree off spaces its pixels 1.0-1.1
-# bins apart and leaves runs of one empty bin between them), and one missing pixel leaves a run
-# of at least two.
+# Bins per sensor pixel: a row's consecutive pixels lie two bins apart, one empty bin between them
+# (two where the measured pitch or angle is a little off across the image), and a missing pixel
+# leaves three or more.
 BINS_PER_PIXEL = 2
 # A run of this many empty bins is a crossing: a pixel or more missing in a row.
 MIN_EMPTY_BINS = 3
@@ -71,7 +70,8 @@ def gap_midpoints(points: np.ndarray, camera_m: np.ndarray, *, max_width_m: floa
         crossing = (first // length == second // length) & (second - first - 1 >= MIN_EMPTY_BINS)
         a, b = flat[first[crossing]], flat[second[crossing]]
         ends_a, ends_b = points[a], points[b]
-        footprint = pitch_rad * np.maximum(np.linalg.norm(ends_a - camera_m, axis=1), np.linalg.norm(ends_b - camera_m, axis=1))
+        ranges = np.maximum(np.linalg.norm(ends_a - camera_m, axis=1), np.linalg.norm(ends_b - camera_m, axis=1))
+        footprint = pitch_rad * ranges
         width = np.linalg.norm(ends_b - ends_a, axis=1)
         narrow = width <= max_width_m + 2 * footprint
         middles.append((ends_a[narrow] + ends_b[narrow]) / 2)
@@ -108,7 +108,8 @@ def sensor_grid(directions: np.ndarray) -> tuple[float, float] | None:
     centre = (low + high) / 2
     # A square about the middle holding GRID_SAMPLE points were they spread evenly over the box.
     half = 0.5 * np.sqrt(np.prod(high - low) * min(GRID_SAMPLE / len(directions), 1.0))
-    inside = np.flatnonzero((np.abs(directions[:, 0] - centre[0]) <= half) & (np.abs(directions[:, 1] - centre[1]) <= half))
+    offsets = np.abs(directions - centre)
+    inside = np.flatnonzero((offsets[:, 0] <= half) & (offsets[:, 1] <= half))
     if len(inside) < MIN_POINTS:
         return None
     sample = directions[inside]

@@ -245,7 +245,8 @@ def _probe(state: PlanState, c: PlanConfig) -> None:
     )
     gaps_from = len(state.clusters) + len(state.creases)
     sought = [GAP_KINDS if gaps_from <= k < gaps_from + len(state.gaps) else None for k in state.chain_cluster]
-    state.probes = probe.probe_chains(state.chains, state.approx_axes, state.surface, sought, min_length_m=c.grid.leaf_m)
+    state.probes = probe.probe_chains(state.chains, state.approx_axes, state.surface, sought,
+                                      min_length_m=c.grid.leaf_m)
 
 
 def _trace(state: PlanState, c: PlanConfig) -> None:

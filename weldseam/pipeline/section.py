@@ -180,7 +180,8 @@ class FineSurface:
             thick = inside & (np.abs(along) <= self.params.slab_m)
             if balanced(along[thick]):
                 keep = thick
-        return Profile(u[keep], w[keep], along[keep], centre, axis, lateral, self._openings_u(centre, travel, axis, lateral))
+        openings_u = self._openings_u(centre, travel, axis, lateral)
+        return Profile(u[keep], w[keep], along[keep], centre, axis, lateral, openings_u)
 
     def _openings_u(self, centre, travel, axis, lateral) -> np.ndarray:
         """The u of the gap middles within OPENING_ALONG_M of the section plane and the window."""

@@ -51,7 +51,9 @@ class SortedProfile:
     openings_u: np.ndarray = field(default_factory=lambda: NO_OPENINGS)
 
     @classmethod
-    def of(cls, u: np.ndarray, w: np.ndarray, params: JointsConfig, openings_u: np.ndarray = NO_OPENINGS) -> SortedProfile:
+    def of(
+        cls, u: np.ndarray, w: np.ndarray, params: JointsConfig, openings_u: np.ndarray = NO_OPENINGS
+    ) -> SortedProfile:
         """The profile of points (u, w) in any order (a stable sort by u)."""
         order = np.argsort(u, kind="stable")
         return cls(u[order], w[order], params, openings_u)
