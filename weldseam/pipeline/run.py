@@ -69,9 +69,7 @@ def _condition(state: PlanState, c: PlanConfig) -> None:
     scan = state.scan
     valid = condition.valid_points(scan.points_m, crop_min_m=c.condition.crop_min_m, crop_max_m=c.condition.crop_max_m)
     if c.segment.gaps and scan.camera_origin_m is not None and np.shape(scan.camera_origin_m) == (3,):
-        # A single view's image, searched for thin gaps (_segment makes them candidates).
-        state.gap_middles = gaps.gap_midpoints(valid, np.asarray(scan.camera_origin_m, float),
-                                               max_width_m=c.joints.gap_max_m)  # fmt: skip
+        state.view_points = valid  # a single view's image, searched for thin gaps by _segment
     state.fine = grid.voxel_centroids(valid, c.condition.voxel_m)
     if len(state.fine) < MIN_POINTS:
         raise InputError(f"{scan.source}: only {len(state.fine)} valid points (finite, inside the crop box)")
@@ -147,9 +145,12 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
         found, too_short = _clusters(state, c, rims)
         state.creases += found
         short += too_short
-    if state.gap_middles is not None:
-        # Lines of them only: a round dropout's middles make a speck, which is no candidate.
-        middles = state.gap_middles
+    if state.view_points is not None:
+        # Lines of the gaps' middles only: a round dropout's make a speck, which is no candidate.
+        # Searched here, not while the fine tree is built on the other core: beside it, it took
+        # twice as long.
+        middles = gaps.gap_midpoints(state.view_points, state.camera, max_width_m=c.joints.gap_max_m)
+        state.view_points = None
         found, _ = segment.cluster_candidates(middles, np.ones(len(middles), bool),
                                               tolerance_m=c.segment.cluster_tolerance_m,
                                               min_length_m=c.segment.min_seam_length_m)  # fmt: skip

@@ -37,7 +37,7 @@ class PlanState:
     fine_tree: object = None
     working: np.ndarray | None = None
     working_camera: np.ndarray | None = None
-    gap_middles: object = None
+    view_points: np.ndarray | None = None  # a single view's valid raw points, until segment searches them
     graphs: dict = field(default_factory=dict)
     offsets_by_radius: dict = field(default_factory=dict)
     # normals, descriptor, segment, support
