@@ -52,7 +52,9 @@ from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.neighbours import pairs_among, pairs_graph, query_workers, radius_pairs
 from weldseam.pipeline.parallel import in_background, worker_process
 from weldseam.pipeline.section import FineSurface, PointFlag, pose_confidence, section_params
-from weldseam.pipeline.state import Dump, PlanState, chain_candidate, dump_seams, reject_lost, run_record, timed_step
+from weldseam.pipeline.state import (
+    Dump, PlanState, Source, chain_candidate, dump_seams, reject_lost, run_record, timed_step,
+)
 from weldseam.types import RunResult, Scan, WeldPath
 
 MIN_POINTS = 100
@@ -192,7 +194,9 @@ def _boundary(state: PlanState, c: PlanConfig) -> None:
 
 def _pairing(state: PlanState, c: PlanConfig) -> None:
     """Rim points paired across each descriptor band, their midpoints the candidate's centre points
-    (the band itself where too narrow to pair); a valley or ridge band's points (a wide one's merged)."""
+    (the band itself where too narrow to pair); a valley or ridge band's points (a wide one's
+    merged); a gap line's middles. Each with its Source (the kinds a gap's seek, a wide valley's
+    chains moved onto their fits)."""
     for members, rim in zip(state.clusters, state.rims):
         in_cluster = np.zeros(len(state.working), dtype=bool)
         in_cluster[members] = True
@@ -211,6 +215,9 @@ def _pairing(state: PlanState, c: PlanConfig) -> None:
     state.centre_points += [state.working[members] for members in state.creases]
     state.centre_points += state.gaps
     state.centre_points += [segment.band_points(state.working[members], c.segment) for members in state.wide_valleys]
+    state.centre_sources = ([Source()] * (len(state.clusters) + len(state.creases))
+                            + [Source(GAP_KINDS)] * len(state.gaps)
+                            + [Source(follow_fits=True)] * len(state.wide_valleys))  # fmt: skip
 
 
 def _thinning(state: PlanState, c: PlanConfig) -> None:
@@ -229,7 +236,7 @@ def _order(state: PlanState, c: PlanConfig) -> None:
     for k, nodes in enumerate(state.centre_points):
         found = order.order_chains(nodes, link_m=c.order.link_m, min_branch_m=c.order.min_branch_m)
         state.chains += found
-        state.chain_cluster += [k] * len(found)
+        state.chain_sources += [state.centre_sources[k]] * len(found)
     for chain in state.chains:
         state.dump("order", chain.points, None)
 
@@ -244,8 +251,7 @@ def _probe(state: PlanState, c: PlanConfig) -> None:
     state.approx_axes = probe.approximate_torch_axes(
         [chain.points for chain in state.chains], state.normals, state.working_tree, c.joints.face_radius_m
     )
-    gaps_from = len(state.clusters) + len(state.creases)
-    sought = [GAP_KINDS if gaps_from <= k < gaps_from + len(state.gaps) else None for k in state.chain_cluster]
+    sought = [source.kinds for source in state.chain_sources]
     state.probes = probe.probe_chains(state.chains, state.approx_axes, state.surface, sought,
                                       min_length_m=c.grid.leaf_m)
 
@@ -254,8 +260,8 @@ def _trace(state: PlanState, c: PlanConfig) -> None:
     """The chains on the seams their probes find first (probe.tracing_order; wide valleys' last), each
     traced; a chain within face_radius / 2 of the opening of a groove traced before is skipped. The
     pieces are then taken in chain order."""
-    chains, wide = state.chains, len(state.clusters) + len(state.creases) + len(state.gaps)
-    by_length = sorted(range(len(chains)), key=lambda k: (state.chain_cluster[k] >= wide,
+    chains, sources = state.chains, state.chain_sources
+    by_length = sorted(range(len(chains)), key=lambda k: (sources[k].follow_fits,
                                                           probe.tracing_order(chains[k], state.probes[k])))
     pieces: dict[int, list[trace.TracedSeam]] = {}
     traced_so_far: list[trace.TracedSeam] = []
@@ -269,7 +275,7 @@ def _trace(state: PlanState, c: PlanConfig) -> None:
             rejected[k] = Rejection.INSIDE_SEAM
         else:
             found = trace.trace_chain(chains[k], state.approx_axes[k], state.probes[k], state.surface, c.trace,
-                                      follow_fits=state.chain_cluster[k] >= wide)
+                                      follow_fits=sources[k].follow_fits)
             pieces[k] = [replace(seam, sources=frozenset({k})) for seam in found]
             traced_so_far += pieces[k]
             if not found:

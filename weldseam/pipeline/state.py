@@ -7,6 +7,7 @@ import time
 from collections.abc import Callable
 from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass, field, replace
+from typing import NamedTuple
 
 import numpy as np
 
@@ -20,6 +21,16 @@ from weldseam.pipeline.section import FineSurface
 from weldseam.types import Scan, WeldPath
 
 Dump = Callable[[str, np.ndarray, np.ndarray | None], None]
+
+
+class Source(NamedTuple):
+    """How the probe and the trace treat a candidate's chains, by what found it: the joint kinds
+    their sections seek (None: any), and whether the chain may lie a few mm off its joint and is
+    moved onto the seam points its sections find (a wide valley's band, thinned over half its
+    width: trace.on_fits; such chains are traced last)."""
+
+    kinds: frozenset | None = None
+    follow_fits: bool = False
 
 
 @dataclass
@@ -56,8 +67,9 @@ class PlanState:
     # boundary, pairing, thinning, grid, order
     rims: list = field(default_factory=list)
     centre_points: list = field(default_factory=list)
+    centre_sources: list = field(default_factory=list)  # a Source per centre_points entry
     chains: list = field(default_factory=list)
-    chain_cluster: list = field(default_factory=list)
+    chain_sources: list = field(default_factory=list)  # the Source of each chain
     # probe, trace, join, extend, split
     surface: FineSurface | None = None
     approx_axes: list = field(default_factory=list)
