@@ -88,7 +88,9 @@ def test_a_plate_without_an_opening_has_no_line_of_middles():
     assert len(gap_midpoints(points, camera, max_width_m=0.004)) < 10
 
 
-@pytest.mark.parametrize("gap_m, roll_deg, camera", [(0.0015, 25.0, (0.0, -0.3, 0.55)), (0.0012, 60.0, (0.1, -0.25, 0.5))])
+@pytest.mark.parametrize(
+    "gap_m, roll_deg, camera", [(0.0015, 25.0, (0.0, -0.3, 0.55)), (0.0012, 60.0, (0.1, -0.25, 0.5))]
+)
 def test_a_square_butt_seen_only_as_missing_pixels_is_planned(gap_m, roll_deg, camera):
     """Two plates on a table, their 1.2-1.5 mm opening returning nothing: it bends no surface,
     and only the gap candidates find it. The path runs the opening's length, within 0.5 mm of it."""
