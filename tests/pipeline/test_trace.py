@@ -139,6 +139,34 @@ def test_a_chain_beside_the_seam_its_sections_find_is_traced_again_on_that_seam(
     assert on_fits(on_it, ValleySurface().fit_many(on_it.points, None, None, None), JointKind.FILLET) is None
 
 
+class CountingValleySurface(ValleySurface):
+    """ValleySurface counting the sections it fits."""
+
+    fitted = 0
+
+    def fit_many(self, centres, travel, axes, lateral, kinds=None):
+        self.fitted += len(centres)
+        return super().fit_many(centres, travel, axes, lateral, kinds)
+
+
+def test_a_chain_beside_a_traced_seam_whose_sections_find_only_that_seam_is_given_up_after_its_coarse_pass():
+    along = np.arange(0.0, 0.2, STEP_M)  # 100 sections, 4 mm off the valley
+    beside = Chain(np.column_stack([along, np.full(len(along), 0.004), np.zeros(len(along))]), False)
+    axes = np.tile([0.0, 0.0, -1.0], (len(along), 1))
+    on_valley = beside.points - [0.0, 0.004, 0.0]
+    traced = TracedSeam(on_valley, axes, False, JointKind.FILLET, 1.0)
+    surface = CountingValleySurface()
+    assert trace_chain(beside, axes, {}, surface, TraceConfig(), follow_fits=True, traced=[traced], beside_m=0.006) == []
+    assert surface.fitted == 25, "every fourth section only"
+    half = TracedSeam(on_valley[:40], axes[:40], False, JointKind.FILLET, 1.0)  # 60 % of it still new
+    surface = CountingValleySurface()
+    (seam,) = trace_chain(beside, axes, {}, surface, TraceConfig(), follow_fits=True, traced=[half], beside_m=0.006)
+    assert len(seam.positions_m) == len(along) and surface.fitted > 100
+    on_it = Chain(on_valley, False)
+    (seam,) = trace_chain(on_it, axes, {}, CountingValleySurface(), TraceConfig(), traced=[traced], beside_m=0.006)
+    assert len(seam.positions_m) == len(along), "a chain on its joint is judged by where it lies, before (inside_traced)"
+
+
 def test_a_shallow_corners_points_may_scatter_farther_across_than_a_square_ones():
     along = np.arange(0.0, 0.03, STEP_M)
     positions = np.column_stack([along, np.zeros(len(along)), np.zeros(len(along))])

@@ -275,7 +275,8 @@ def _trace(state: PlanState, c: PlanConfig) -> None:
             rejected[k] = Rejection.INSIDE_SEAM
         else:
             found = trace.trace_chain(chains[k], state.approx_axes[k], state.probes[k], state.surface, c.trace,
-                                      follow_fits=sources[k].follow_fits)
+                                      follow_fits=sources[k].follow_fits, traced=traced_so_far,
+                                      beside_m=c.joints.face_radius_m / 2)  # fmt: skip
             pieces[k] = [replace(seam, sources=frozenset({k})) for seam in found]
             traced_so_far += pieces[k]
             if not found:

@@ -9,6 +9,7 @@ of failed sections longer than `max_gap_m` split the seam.
 from __future__ import annotations
 
 from collections import Counter
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -31,7 +32,8 @@ ON_FITS_WINDOW = 5
 # probes): where fewer than half trace.min_valid_fraction of those fit any joint, the whole
 # chain cannot reach that fraction unless its fits crowd between the samples, and it is not
 # fitted further (most candidates are plate and table edges). A chain lying a few mm off its
-# joint (follow_fits) is no exception: its sections, 2 half_width_m wide, still find the joint.
+# joint (follow_fits) is no exception: its sections, 2 half_width_m wide, still find the joint;
+# of its fits, only those off the seams traced before count (inside_traced, for where it lies).
 COARSE_STRIDE = 4
 MIN_COARSE_SECTIONS = 12
 OUTLINE_REASON = "a corner with one face unseen whose other face is only an occluder's outline (a shadow's edge?)"
@@ -115,7 +117,7 @@ def end_to_end(a: TracedSeam, between: tuple[np.ndarray, np.ndarray, np.ndarray]
 
 def trace_chain(
     chain: Chain, approx_axes: np.ndarray, probe_fits: dict[int, SectionFit], surface: FineSurface,
-    params: TraceConfig, follow_fits: bool = False,
+    params: TraceConfig, follow_fits: bool = False, traced: Sequence[TracedSeam] = (), beside_m: float = 0.0,
 ) -> list[TracedSeam]:
     """Seams found along one chain (none if the chain is not a seam): a section at every chain
     point, seeking the joints its probes found (and their kin, joints.akin). The chain's probes are
@@ -123,7 +125,9 @@ def trace_chain(
     again. A long chain is fitted coarsely first (COARSE_STRIDE) and given up early where few of
     those sections fit. `follow_fits`: a chain thinned from a band wider than its joint (a wide
     valley's) may lie a few mm off it; where its sections find the seam off it (on_fits), they are
-    taken again across the line they found."""
+    taken again across the line they found; its coarse sections count only where they find the
+    seam outside the seams `traced` before (within their half-opening + `beside_m`): a chain whose
+    sections find only those adds nothing, and two more passes over it cost most of a trace."""
     travel, axes, lateral = section_frames(chain.points, approx_axes, chain.closed)
     sought = akin({fit.kind for fit in probe_fits.values() if fit.kind is not None}) or None  # none: any
     found = dict(probe_fits)
@@ -135,7 +139,11 @@ def trace_chain(
     count = len(chain.points)
     if count >= MIN_COARSE_SECTIONS:
         fit_at(range(0, count, COARSE_STRIDE))
-        if _fitting(evidence(list(found.values()))) < params.min_valid_fraction / 2:
+        coarse = [fit for fit in evidence(list(found.values())) if fit.kind is not None]
+        if follow_fits and coarse:
+            coarse = [fit for fit, known in zip(coarse, covered(np.array([fit.point_m for fit in coarse]), traced,
+                                                                beside_m)) if not known]  # fmt: skip
+        if len(coarse) / len(found) < params.min_valid_fraction / 2:
             return []
     fit_at(range(count))
     fits = evidence([found[k] for k in range(count)])
@@ -181,11 +189,6 @@ def _piece(fits: list[SectionFit], closed: bool, joint: JointKind, confidence: f
     )
 
 
-def _fitting(fits: list[SectionFit]) -> float:
-    """The fraction of `fits` that fit some joint."""
-    return sum(fit.kind is not None for fit in fits) / len(fits)
-
-
 def evidence(fits: list[SectionFit]) -> list[SectionFit]:
     """`fits` with each corner placed from an occluder's outline (PointFlag.OUTLINE) taken as no
     fit: by itself it may be the edge of a shadow. Only an extension takes it, along the curve of a
@@ -218,11 +221,17 @@ def inside_traced(points: np.ndarray, seams: list[TracedSeam], beside_m: float) 
     crease band of a groove often breaks into lines along its edges, and each traces (re-centred)
     to the seam itself: once the seam is traced, tracing such a line again adds nothing that the
     extension of the seam's ends does not (a line along an edge traces the seam less well)."""
-    covered = np.zeros(len(points), bool)
+    return bool(np.mean(covered(points, seams, beside_m)) >= INSIDE_FRACTION) if len(points) else True
+
+
+def covered(points: np.ndarray, seams: Sequence[TracedSeam], beside_m: float) -> np.ndarray:
+    """(K,) whether each of `points` (K, 3) lies within the half-opening + `beside_m` of a seam
+    point of one of `seams`."""
+    inside = np.zeros(len(points), bool)
     for seam in seams:
         reach = seam.half_opening_m + beside_m
-        covered |= cKDTree(seam.positions_m).query(points, distance_upper_bound=reach)[0] <= reach
-    return bool(np.mean(covered) >= INSIDE_FRACTION) if len(points) else True
+        inside |= cKDTree(seam.positions_m).query(points, distance_upper_bound=reach)[0] <= reach
+    return inside
 
 
 def consistent(positions: np.ndarray, axes: np.ndarray, max_offset_m, max_turn_deg: float) -> np.ndarray:
