@@ -66,3 +66,19 @@ def test_a_chain_shorter_than_the_trace_takes_is_not_probed_and_the_others_probe
     assert all(np.array_equal(probes[1][k].point_m, alone[k].point_m) for k in alone)
     assert all(fit.kind == JointKind.V_GROOVE for fit in alone.values())
     assert probe_chains([speck], axes[:1], surface, min_length_m=0.002) == [{}]
+
+
+def test_a_short_chain_is_probed_once_per_stretch_the_trace_bridges():
+    """Probes closer than the trace's max_gap_m are one place to it: a chain shorter than that
+    gets one probe in its middle, one up to twice as long two (its ends), longer ones three."""
+    x, y = grid((-0.07, 0.07), (-0.035, 0.035))
+    surface = surface_of(np.column_stack([x, y, -v_depth(y, half_open=0.008, depth=0.006)]))
+    stretch = TraceConfig().max_gap_m
+    chains = [Chain(np.column_stack([np.arange(n) * 0.0025, np.zeros(n), np.zeros(n)]), False)
+              for n in (3, 7, 16)]  # 5, 15 and 37.5 mm
+    axes = [np.tile([0.0, 0.0, -1.0], (len(c.points), 1)) for c in chains]
+    probes = probe_chains(chains, axes, surface, min_length_m=0.002, stretch_m=stretch)
+    assert [sorted(p) for p in probes] == [[1], [0, 6], [0, 8, 15]]
+    assert all(fit.kind == JointKind.V_GROOVE for p in probes for fit in p.values())
+    assert [sorted(p) for p in probe_chains(chains, axes, surface, min_length_m=0.002)] == [[0, 1, 2], [0, 3, 6],
+                                                                                             [0, 8, 15]]

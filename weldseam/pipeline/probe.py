@@ -38,19 +38,23 @@ def approximate_torch_axes(centres: list[np.ndarray], normals, tree, radius_m) -
 
 def probe_chains(
     chains: list[Chain], approx_axes: list[np.ndarray], surface: FineSurface,
-    sought: list[frozenset[JointKind] | None] | None = None, min_length_m: float = 0.0,
+    sought: list[frozenset[JointKind] | None] | None = None, min_length_m: float = 0.0, stretch_m: float = 0.0,
 ) -> list[dict[int, SectionFit]]:
-    """For each chain, the fits of PROBE_SECTIONS evenly spaced sections along it seeking its
-    `sought` kinds (None: any kind, for one chain or all), by chain point index, in the frames trace_chain uses (so it
-    reuses them); none for a chain shorter than `min_length_m` (the trace rejects it unprobed).
-    One batch per distinct `sought`."""
+    """For each chain, the fits of sections along it seeking its `sought` kinds (None: any kind,
+    for one chain or all), by chain point index, in the frames trace_chain uses (so it reuses
+    them); none for a chain shorter than `min_length_m` (the trace rejects it unprobed).
+    PROBE_SECTIONS evenly spaced from end to end, or one per `stretch_m` of a shorter chain (the
+    trace's max_gap_m: sections within one such stretch are one place to it), one in the middle
+    of a chain shorter than that. One batch per distinct `sought`."""
     sought = [None] * len(chains) if sought is None else sought
     frames = {}
     for k, (chain, axes) in enumerate(zip(chains, approx_axes)):
-        if polyline_length(chain.points, chain.closed) < min_length_m:
+        length = polyline_length(chain.points, chain.closed)
+        if length < min_length_m:
             continue
         travel, frame_axes, lateral = section_frames(chain.points, axes, chain.closed)
-        at = even_indices(len(chain.points), PROBE_SECTIONS)
+        count = min(PROBE_SECTIONS, 1 + int(length / stretch_m)) if stretch_m > 0 else PROBE_SECTIONS
+        at = even_indices(len(chain.points), count) if count > 1 else np.array([len(chain.points) // 2])
         frames[k] = (at, (chain.points[at], travel[at], frame_axes[at], lateral[at]))
     probes = [{} for _ in chains]
     for kinds in dict.fromkeys(sought[k] for k in frames):

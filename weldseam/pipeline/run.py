@@ -253,7 +253,7 @@ def _probe(state: PlanState, c: PlanConfig) -> None:
     )
     sought = [source.kinds for source in state.chain_sources]
     state.probes = probe.probe_chains(state.chains, state.approx_axes, state.surface, sought,
-                                      min_length_m=c.grid.leaf_m)
+                                      min_length_m=c.grid.leaf_m, stretch_m=c.trace.max_gap_m)
 
 
 def _trace(state: PlanState, c: PlanConfig) -> None:
