@@ -495,3 +495,62 @@ def test_an_end_on_a_tight_curve_is_also_sought_along_its_curve_and_a_straight_o
         off_ring = [abs(np.hypot(*point[:2]) - radius_m) for point in ahead]
         if curved:
             assert off_ring[0] > 0.0011 and off_ring[1] < min(0.0006, off_ring[0] / 3)
+
+
+def tee_on_a_table(rng):
+    """A T-joint along x ending at x = 0: flange top z = 0 left of the web (y in -30..0 mm), the
+    web's face y = 0 up to z = 30 mm; the table 10 mm below the flange seen past its end (x 0..40
+    mm). The fillet runs along x at y = z = 0."""
+    x, y = grid((-0.08, 0.0), (-0.03, 0.0))
+    flange = np.column_stack([x, y, np.zeros(len(x))])
+    x, z = grid((-0.08, 0.0), (0.0008, 0.03))
+    web = np.column_stack([x, np.zeros(len(x)), z])
+    x, y = grid((0.0, 0.04), (-0.03, 0.03))
+    table = np.column_stack([x, y, np.full(len(x), -0.01)])
+    points = np.vstack([flange, web, table])
+    return points + rng.normal(0, 0.0001, points.shape)
+
+
+class CountingSurface:
+    """A FineSurface counting the sections fitted (fit and fit_many)."""
+
+    def __init__(self, surface):
+        self.surface, self.fitted = surface, 0
+
+    def __getattr__(self, name):
+        return getattr(self.surface, name)
+
+    def fit(self, *args, **kwargs):
+        self.fitted += 1
+        return self.surface.fit(*args, **kwargs)
+
+    def fit_many(self, centres, *args, **kwargs):
+        self.fitted += len(centres)
+        return self.surface.fit_many(centres, *args, **kwargs)
+
+
+def test_a_fillet_stops_where_the_camera_sees_past_the_parts_end_without_seeking_it_across_a_hole(rng):
+    """Past the tee's end the camera sees the table 10 mm below the seam line: the part ends there,
+    and the fillet stops without the sections of a hole search (max_skip_m to max_hole_m ahead,
+    one step apart). Without a single camera (no view) nothing says it is no hole: those sections
+    are fitted before the fillet stops at the same place."""
+    from scipy.spatial import cKDTree
+
+    from weldseam.config import PlanConfig
+    from weldseam.pipeline.occlusion import ViewBuffer
+    from weldseam.pipeline.section import FineSurface, section_params
+
+    points = tee_on_a_table(rng)
+    axis = -np.array([0.0, -1.0, 1.0]) / np.sqrt(2)  # into the corner, on the bisector
+    x = np.arange(-0.075, -0.055, STEP_M)
+    seam = TracedSeam(np.column_stack([x, np.zeros(len(x)), np.zeros(len(x))]), np.tile(axis, (len(x), 1)), False,
+                      JointKind.FILLET, 1.0)
+    params = replace(ExtendConfig(), step_m=STEP_M, max_hole_m=0.05)
+    view = ViewBuffer.build(points, np.array([0.0, -0.25, 0.35]), 0.001)
+    seen = CountingSurface(FineSurface(points, cKDTree(points), section_params(PlanConfig()), view))
+    stopped = extend_seam(seam, seen, params).positions_m
+    assert -0.006 < stopped[:, 0].max() < 0.001, "to the tee's end, not beyond it"
+    assert np.abs(stopped[:, 1:]).max() < 0.001, "in the corner"
+    blind = CountingSurface(FineSurface(points, cKDTree(points), section_params(PlanConfig()), None))
+    assert np.array_equal(extend_seam(seam, blind, params).positions_m, stopped)
+    assert blind.fitted - seen.fitted >= round((params.max_hole_m - params.max_skip_m) / STEP_M)

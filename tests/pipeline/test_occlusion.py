@@ -26,6 +26,19 @@ def test_the_view_buffer_finds_what_lies_nearer_on_a_line_of_sight():
     assert view.nearer_than(behind, margin_m=0.06)[0] == -1  # the top is 50 mm nearer, not 60
 
 
+def test_the_view_buffer_says_where_its_line_of_sight_passes_a_point_and_meets_something_beyond():
+    """A table with a hole (x > 0.02) and a block's top 50 mm up: the camera sees past a point
+    10 mm over the table, not past one on it, one under the block's top (nearer), or one over
+    the hole (nothing seen: a dropout)."""
+    table = grid((-0.05, 0.05), (-0.05, 0.05), 0.0)
+    table = table[table[:, 0] < 0.02]
+    block_top = grid((-0.03, -0.01), (-0.02, 0.02), 0.05)
+    view = ViewBuffer.build(np.vstack([table, block_top]), CAMERA, 0.001)
+    over, on, under_block, over_hole = [0.0, 0.03, 0.01], [0.0, 0.03, 0.0], [-0.02, 0.0, 0.0], [0.035, 0.0, 0.01]
+    assert view.seen_past(np.array([over, on, under_block, over_hole]), 0.004).tolist() == [True, False, False, False]
+    assert not view.seen_past(np.array([over]), 0.012)[0], "10 mm beyond it, not 12"
+
+
 def test_only_the_flanges_end_under_a_wall_is_an_occluded_rim():
     """A flange (z = 0, y > 0) ending at a web's foot (y = 0) whose face the camera (straight above
     the foot) cannot see, the web's top 40 mm up (y in [-8, 0] mm), and a plate edge (x = 0.04)

@@ -33,7 +33,7 @@ from weldseam.geometry import arc_lengths, bend_corner, even_indices, polyline_l
 from weldseam.pipeline.bridge import GrooveTemplate, groove_template, part_ends_ahead
 from weldseam.pipeline.carried import CornerTemplate, corner_template
 from weldseam.pipeline.ends import (
-    END_BASELINE_M, TANGENT_BASELINE_M, SeamLine, end_curve, last_full, on_curve, seam_line,
+    END_BASELINE_M, TANGENT_BASELINE_M, SeamLine, ahead, end_curve, last_full, on_curve, seam_line,
 )
 from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.parallel import map_shared
@@ -52,6 +52,13 @@ LINE_AIM_DEG = 5.0
 # A corner's faces are carried on from this many sections over the last TANGENT_BASELINE_M of
 # arc up to its last fit with both faces seen (SeamEnd.corner).
 CORNER_FITS = 8
+# The joints whose seam point lies on the part's surfaces (the inside corner of two faces). Where
+# the camera sees this much past their seam line ahead, the part is not there: their own faces,
+# with 1-2 mm of ripple and depth steps, lie within -5..+1.6 mm of it along the line of sight over
+# the corner ends of seeds 0-4 (fillet, lap, pipe on plate, saddle); past a part's end it sees the
+# table or a fixture 5-260 mm beyond.
+ON_SURFACE = frozenset({JointKind.FILLET, JointKind.LAP})
+CORNER_PAST_M = 0.004
 
 
 @dataclass(frozen=True)
@@ -356,16 +363,32 @@ def _tack_step(extension: Extension, end: SeamEnd) -> Step | None:
 
 
 def _part_end_step(extension: Extension, end: SeamEnd) -> Step | None:
-    """STOP where the scan sees past the part's end within part_end_reach_m ahead (bridge.
-    part_ends_ahead): in a hole the camera sees nothing, past the part's end it sees what lies
-    beyond (the table), and a seam on another part in line beyond that gap is another seam."""
+    """STOP where the scan sees past the part's end within part_end_reach_m ahead: in a hole the
+    camera sees nothing, past the part's end it sees what lies beyond (the table), and a seam on
+    another part in line beyond that gap is another seam. A groove's (bridge.part_ends_ahead:
+    deeper than its bottom, in its opening); an inside corner's (_corner_ends_ahead)."""
     template = end.template()
-    direction, _ = end.heading()
+    direction, bend = end.heading()
     reach = extension.params.part_end_reach_m
     if template is not None and part_ends_ahead(extension.surface, end.positions[-1], direction, end.axes[-1],
                                                 template, reach):  # fmt: skip
         return STOP
+    if extension.joint in ON_SURFACE and _corner_ends_ahead(extension, end.positions[-1], direction, bend):
+        return STOP
     return None
+
+
+def _corner_ends_ahead(extension: Extension, last_point, direction, bend) -> bool:
+    """Whether the camera sees past an inside corner's seam line (ON_SURFACE) at half or more of the
+    points one step apart along its predicted curve within part_end_reach_m ahead (ViewBuffer.
+    seen_past, by CORNER_PAST_M); False without a single camera (no view)."""
+    view = extension.surface.view
+    if view is None:
+        return False
+    params = extension.params
+    distances = np.arange(params.step_m, params.part_end_reach_m + params.step_m / 2, params.step_m)
+    predicted = np.array([ahead(last_point, direction, bend, distance)[0] for distance in distances])
+    return 2 * np.count_nonzero(view.seen_past(predicted, CORNER_PAST_M)) >= len(predicted)
 
 
 def _hole_step(extension: Extension, end: SeamEnd) -> Step | None:

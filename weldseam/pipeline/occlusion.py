@@ -64,6 +64,19 @@ class ViewBuffer:
     def nearer_than(self, queries: np.ndarray, margin_m: float) -> np.ndarray:
         """(Q,) index of the nearest scan point seen in the direction of each query (its bin and the
         8 around it) when it is at least `margin_m` nearer to the camera than the query, else -1."""
+        best, best_range, ranges = self._seen(queries)
+        return np.where(best_range <= ranges - margin_m, best, -1)
+
+    def seen_past(self, queries: np.ndarray, margin_m: float) -> np.ndarray:
+        """(Q,) whether everything the camera sees in the direction of each query (its bin and the 8
+        around it) lies at least `margin_m` farther than the query: the line of sight passes where
+        the query is, and nothing is there. False where it sees nothing that way (a dropout)."""
+        _, best_range, ranges = self._seen(queries)
+        return np.isfinite(best_range) & (best_range >= ranges + margin_m)
+
+    def _seen(self, queries: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(index, range) of the nearest scan point seen in the direction of each query (its bin and
+        the 8 around it; -1, inf where none), and the queries' own ranges (m), each (Q,)."""
         offsets = queries - self.camera_m
         ranges = np.linalg.norm(offsets, axis=1)
         cells = _cells(offsets, self.frame, self.bin_rad)
@@ -78,10 +91,9 @@ class ViewBuffer:
         # The first of the nine bins whose point is nearest (argmin: the first of equals).
         pick = np.argmin(found, axis=0)
         columns = np.arange(len(queries))
-        best, best_range = index[pick, columns], found[pick, columns]
-        nearer = np.empty_like(best)
-        nearer[order] = np.where(best_range <= ranges[order] - margin_m, best, -1)
-        return nearer
+        best, best_range = np.empty(len(queries), index.dtype), np.empty(len(queries))
+        best[order], best_range[order] = index[pick, columns], found[pick, columns]
+        return best, best_range, ranges
 
 
 def _cells(offsets: np.ndarray, frame: np.ndarray, bin_rad: float) -> np.ndarray:
