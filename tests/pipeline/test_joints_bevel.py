@@ -109,3 +109,17 @@ def test_what_is_not_a_bevel_gives_no_bevel(rng, shape):
     u = np.arange(-0.025, 0.025, 0.0005)
     w = shape(u) + rng.normal(0.0, 0.0002, len(u))
     assert isinstance(bevel.fit(SortedProfile.of(u, w, PARAMS)), NoFit)
+
+
+def test_a_bevel_wall_in_depth_steps_is_one_wall_at_the_plates_noise():
+    """Depth in steps: of a wall's points most lie on its line and the rest a step (0.6 mm) off,
+    so their median deviation is ~0 and a band of 3 of their own sigma would take only the first.
+    The plate surface beside it, seen by the same sensor, says how noisy the wall is."""
+    x = np.linspace(-0.0014, 0.0025, 17)
+    steps = np.array([0, 0, 0, 0, -1, 1, 1, 0, 0, -1, 1, 0, 0, 0, -1, -1, 1]) * 0.0006
+    depth = 0.004 + 1.06 * x + steps
+    wall = bevel._bevel_wall(x, depth, 1.0, surface_sigma=0.0003)
+    assert wall is not None
+    edge, slope, _, _ = wall
+    assert abs(edge + 0.004 / 1.06) < 0.0003 and abs(slope - 1.06) < 0.1
+    assert bevel._bevel_wall(x, depth, 1.0, surface_sigma=0.0) is None, "its own noise alone: half of it off the line"

@@ -75,7 +75,7 @@ def fit(profile: SortedProfile) -> ProfileFit | NoFit:
     if deepest < params.groove_min_depth_m:
         return NoFit("depression shallower than joints.groove_min_depth_m")
     gx, gd = x[groove], depth[groove]
-    sides = [edges for edges in (_edges(gx, gd, ends, bevel_side, depth_limit) for bevel_side in (0, 1))
+    sides = [edges for edges in (_edges(gx, gd, ends, bevel_side, depth_limit, sigma) for bevel_side in (0, 1))
              if edges is not None]
     if not sides:
         return NoFit("no bevel wall and square wall")
@@ -95,20 +95,20 @@ def fit(profile: SortedProfile) -> ProfileFit | NoFit:
                       tuple((float(a), float(b)) for a, b in outline))  # fmt: skip
 
 
-def _edges(x, depth, ends, bevel_side: int, depth_limit: float):
+def _edges(x, depth, ends, bevel_side: int, depth_limit: float, sigma: float):
     """(bevel edge, square edge, bevel slope or None (hidden), score) along the surface with the
     bevel on side `bevel_side` (0: lower x) of the depression (points x, depth), `ends` the
     surface's (last point, edge past it) on each side, or None where the depression is not so.
     The bevel wall's edge lies within EDGE_TOLERANCE_M of the surface's last point on its side, or
     within depth_limit / slope (m) of it: a wall point passes for surface down to `depth_limit`
-    below it (a shallow bevel in 1 mm of noise: 2-5 mm)."""
+    below it (a shallow bevel in 1 mm of noise: 2-5 mm); `sigma`: the surface's noise."""
     (bevel_last, bevel_hidden), (square_last, square_hidden) = ends[bevel_side], ends[1 - bevel_side]
     toward = 1.0 if bevel_side == 0 else -1.0  # from the bevel's side toward the square one
     near_square = np.abs(x - square_last) <= SQUARE_WALL_M + np.abs(square_hidden - square_last)
     square = _square_wall(x[near_square], depth[near_square])
     square_x = square_hidden if square is None else square
     clear = toward * (square_x - x) > SQUARE_WALL_M  # the depression's points off the square wall
-    bevel = _bevel_wall(x[clear], depth[clear], toward)
+    bevel = _bevel_wall(x[clear], depth[clear], toward, sigma)
     if bevel is not None:
         bevel_x, bevel_slope, score, root_x = bevel
         if abs(bevel_x - bevel_last) > max(EDGE_TOLERANCE_M, depth_limit / bevel_slope):
@@ -134,18 +134,20 @@ def _square_wall(x: np.ndarray, depth: np.ndarray) -> float | None:
     return position
 
 
-def _bevel_wall(x: np.ndarray, depth: np.ndarray, toward: float):
+def _bevel_wall(x: np.ndarray, depth: np.ndarray, toward: float, surface_sigma: float):
     """(edge, slope, noise, root) of a straight bevel wall through the points (x, depth), falling
     toward `toward` at a bevel's slope, or None: a robust line depth = c + m x refitted twice to
-    the points within max(3 sigma, WALL_BAND_M), MIN_WALL_FRACTION of them on it; its edge at depth
-    0, its root where its points end toward the square side."""
+    the points within max(3 sigma, WALL_BAND_M), MIN_WALL_FRACTION of them on it, sigma the noise
+    of its points about it but no less than the plate surface's (`surface_sigma`: one sensor sees
+    both, and the noise of a few wall points trimmed at 3 sigma shrinks with each refit); its edge
+    at depth 0, its root where its points end toward the square side."""
     if len(x) < MIN_WALL_POINTS:
         return None
     inliers = np.ones(len(x), bool)
     for _ in range(2):
         c, m = line(x[inliers], depth[inliers])
         residual = depth - (c + m * x)
-        inliers = np.abs(residual) <= max(3 * noise(residual[inliers]), WALL_BAND_M)
+        inliers = np.abs(residual) <= max(3 * max(noise(residual[inliers]), surface_sigma), WALL_BAND_M)
         if np.count_nonzero(inliers) < MIN_WALL_POINTS:
             return None
     c, m = line(x[inliers], depth[inliers])
