@@ -122,12 +122,6 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
     butts alone). Clusters too short are recorded as rejected. The table under the part (_support)
     is found here from the unbent points, before the worker forks (_probe): found after, its 8 MB of
     temporaries would land on pages shared with the worker, each then copied."""
-    # The gap search reads the raw view alone, on the other core while the candidates below are
-    # found (not while condition builds the fine tree there: beside that it took twice as long).
-    middles = None if state.view_points is None else in_background(
-        gaps.gap_midpoints, state.view_points, state.camera, max_width_m=c.joints.gap_max_m
-    )
-    state.view_points = None
     state.threshold = c.segment.threshold
     if state.threshold is None:
         state.threshold = segment.crease_threshold(c, c.descriptor.variant)
@@ -153,9 +147,12 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
         found, too_short = _clusters(state, c, rims)
         state.creases += found
         short += too_short
-    if middles is not None:
+    if state.view_points is not None:
         # Lines of the gaps' middles only: a round dropout's make a speck, which is no candidate.
-        middles = middles.result()
+        # Searched here, not while the fine tree is built on the other core: beside it, it took
+        # twice as long.
+        middles = gaps.gap_midpoints(state.view_points, state.camera, max_width_m=c.joints.gap_max_m)
+        state.view_points = None
         found, _ = segment.cluster_candidates(middles, np.ones(len(middles), bool),
                                               tolerance_m=c.segment.cluster_tolerance_m,
                                               min_length_m=c.segment.min_seam_length_m)  # fmt: skip
