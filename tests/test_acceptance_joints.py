@@ -39,7 +39,7 @@ KNOWN_GAPS: dict[tuple[str, int], set[str]] = {
     # and lift the mean axis error over 3 degrees.
     ("saddle", 0): {"axis"},
     ("saddle", 1): {"coverage"},
-    ("saddle", 3): {"coverage", "axis"},
+    ("saddle", 3): {"coverage"},
     ("tacked", 2): {"position"},
     ("clutter", 2): {"count", "position", "coverage", "axis"},
     ("valley", 0): {"count", "position", "coverage", "axis"},
