@@ -116,23 +116,3 @@ def test_a_t_joint_seen_from_above_is_found_where_the_flange_ends_under_the_web(
     assert np.degrees(np.arccos(path.rotations[inside, :, 2] @ bisector)).max() < 3.0
     assert any("one face of the corner was not seen" in w for w in result.warnings)
     assert np.mean(path.pose_confidence[inside] == 0.7) > 0.9  # each pose says its face was unseen
-
-
-def test_a_chain_on_the_table_is_not_probed_and_the_corner_on_the_flange_is_traced(rng):
-    """The flange's edge stands on the table (z = -10 mm): the corner at its foot lies on the table
-    and is what the part forms with it, so its chain gets no probe sections; the web's corner on
-    the flange, 10 mm above the table, is probed and traced."""
-    from weldseam.pipeline.candidates import Rejection
-    from weldseam.pipeline.run import run_steps
-
-    x, y = (a.ravel() for a in np.meshgrid(np.arange(-0.1, 0.1, 0.0007), np.arange(0.16, 0.26, 0.0007)))
-    table = np.column_stack([x, y, np.full(len(x), -0.01)]) + rng.normal(0.0, 0.0003, (len(x), 3))
-    points = np.vstack([fillet_cloud(rng), table])  # the table the largest plane, nothing beyond it
-    state = run_steps(Scan(points_m=points, camera_origin_m=np.array([0.0, 0.3, 0.3]), source="test"), PlanConfig(),
-                      last="trace")
-    assert state.support is not None
-    middles = [np.median(chain.points, axis=0) for chain in state.chains]
-    on_table = [k for k, (_, y, z) in enumerate(middles) if abs(y - 0.08) < 0.003 and z < -0.008]  # the edge's foot
-    assert on_table and all(state.probes[k] == {} for k in on_table)
-    assert all(state.chain_candidates[k].rejection == Rejection.ON_SUPPORT for k in on_table)
-    assert any(np.abs(seam.positions_m[:, 1:]).max() < 0.001 for seam in state.seams), "the web's corner on the flange"

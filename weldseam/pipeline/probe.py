@@ -8,7 +8,6 @@ in one batch for all chains (half on the worker process) and reused by the trace
 from __future__ import annotations
 
 import itertools
-from collections.abc import Sequence
 
 import numpy as np
 
@@ -40,11 +39,10 @@ def approximate_torch_axes(centres: list[np.ndarray], normals, tree, radius_m) -
 def probe_chains(
     chains: list[Chain], approx_axes: list[np.ndarray], surface: FineSurface,
     sought: list[frozenset[JointKind] | None] | None = None, min_length_m: float = 0.0, stretch_m: float = 0.0,
-    skipped: Sequence[bool] = (),
 ) -> list[dict[int, SectionFit]]:
     """For each chain, the fits of sections along it seeking its `sought` kinds (None: any kind,
     for one chain or all), by chain point index, in the frames trace_chain uses (so it reuses
-    them); none for a chain shorter than `min_length_m` or `skipped` (the trace rejects it unprobed).
+    them); none for a chain shorter than `min_length_m` (the trace rejects it unprobed).
     PROBE_SECTIONS evenly spaced from end to end, or one per `stretch_m` of a shorter chain (the
     trace's max_gap_m: sections within one such stretch are one place to it), one in the middle
     of a chain shorter than that. One batch per distinct `sought`."""
@@ -52,7 +50,7 @@ def probe_chains(
     frames = {}
     for k, (chain, axes) in enumerate(zip(chains, approx_axes)):
         length = polyline_length(chain.points, chain.closed)
-        if length < min_length_m or (len(skipped) and skipped[k]):
+        if length < min_length_m:
             continue
         travel, frame_axes, lateral = section_frames(chain.points, axes, chain.closed)
         count = min(PROBE_SECTIONS, 1 + int(length / stretch_m)) if stretch_m > 0 else PROBE_SECTIONS

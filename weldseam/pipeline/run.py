@@ -252,15 +252,8 @@ def _probe(state: PlanState, c: PlanConfig) -> None:
         [chain.points for chain in state.chains], state.normals, state.working_tree, c.joints.face_radius_m
     )
     sought = [source.kinds for source in state.chain_sources]
-    # A chain on the table under the part traces nothing but what the part forms with the table
-    # (_support drops it): not probed. Within half the support's tolerance, so that the top of a
-    # 1-2 mm sheet lying on the table is no table.
-    state.on_support = [state.support is not None and support.on_plane(chain.points, state.support,
-                                                                      c.support.tolerance_m / 2)
-                        for chain in state.chains]  # fmt: skip
     state.probes = probe.probe_chains(state.chains, state.approx_axes, state.surface, sought,
-                                      min_length_m=c.grid.leaf_m, stretch_m=c.trace.max_gap_m,
-                                      skipped=state.on_support)  # fmt: skip
+                                      min_length_m=c.grid.leaf_m, stretch_m=c.trace.max_gap_m)
 
 
 def _trace(state: PlanState, c: PlanConfig) -> None:
@@ -276,8 +269,6 @@ def _trace(state: PlanState, c: PlanConfig) -> None:
     for k in by_length:
         if polyline_length(chains[k].points, chains[k].closed) < c.grid.leaf_m:
             rejected[k] = Rejection.SHORT_CHAIN
-        elif state.on_support[k]:
-            rejected[k] = Rejection.ON_SUPPORT
         elif not any(fit.kind is not None for fit in state.probes[k].values()):
             rejected[k] = Rejection.NO_JOINT
         elif trace.inside_traced(chains[k].points, traced_so_far, c.joints.face_radius_m / 2):

@@ -74,7 +74,6 @@ class PlanState:
     surface: FineSurface | None = None
     approx_axes: list = field(default_factory=list)
     probes: list = field(default_factory=list)
-    on_support: list = field(default_factory=list)  # per chain: it lies on the table (not probed)
     seams: list = field(default_factory=list)
     holes: list = field(default_factory=list)
     short_candidates: list[Candidate] = field(default_factory=list)

@@ -64,16 +64,10 @@ def off_support(seams: list[TracedSeam], surface, support, tolerance_m: float) -
 
 
 def lies_on(seam: TracedSeam, plane, tolerance_m: float) -> bool:
-    """Whether an inside corner's or a lap's points lie on `plane` (on_plane): where a part stands
-    or lies on the table, even where its side is hard to see."""
-    return seam.joint in (JointKind.FILLET, JointKind.LAP) and on_plane(seam.positions_m, plane, tolerance_m)
-
-
-def on_plane(points: np.ndarray, plane, tolerance_m: float) -> bool:
-    """Whether points (K, 3) lie on `plane` (point, unit normal): their median distance from it at
-    most `tolerance_m`."""
+    """Whether an inside corner's or a lap's points lie on `plane` (their median distance at most
+    `tolerance_m`): where a part stands or lies on the table, even where its side is hard to see."""
     centre, normal = plane
-    return bool(np.median(np.abs((points - centre) @ normal)) <= tolerance_m)
+    return seam.joint in (JointKind.FILLET, JointKind.LAP) and np.median(np.abs((seam.positions_m - centre) @ normal)) <= tolerance_m
 
 
 def formed_with(seam: TracedSeam, surface, plane, tolerance_m: float) -> bool:
