@@ -35,7 +35,7 @@ from weldseam.pipeline.carried import CornerTemplate, corner_template
 from weldseam.pipeline.ends import (
     END_BASELINE_M, TANGENT_BASELINE_M, SeamLine, ahead, end_curve, last_full, on_curve, seam_line,
 )
-from weldseam.pipeline.joints import JointKind
+from weldseam.pipeline.joints import ON_SURFACE, JointKind
 from weldseam.pipeline.parallel import map_shared
 from weldseam.pipeline.section import FineSurface, PointFlag, SectionFit, section_frames
 from weldseam.pipeline.holes import across_hole, hole_aims, hole_of
@@ -52,12 +52,11 @@ LINE_AIM_DEG = 5.0
 # A corner's faces are carried on from this many sections over the last TANGENT_BASELINE_M of
 # arc up to its last fit with both faces seen (SeamEnd.corner).
 CORNER_FITS = 8
-# The joints whose seam point lies on the part's surfaces (the inside corner of two faces). Where
-# the camera sees this much past their seam line ahead, the part is not there: their own faces,
-# with 1-2 mm of ripple and depth steps, lie within -5..+1.6 mm of it along the line of sight over
-# the corner ends of seeds 0-4 (fillet, lap, pipe on plate, saddle); past a part's end it sees the
-# table or a fixture 5-260 mm beyond.
-ON_SURFACE = frozenset({JointKind.FILLET, JointKind.LAP})
+# Where the camera sees this much past the seam line ahead of a joint whose seam point lies on the
+# part's surfaces (joints.ON_SURFACE), the part is not there: their own faces, with 1-2 mm of
+# ripple and depth steps, lie within -5..+1.6 mm of it along the line of sight over the corner ends
+# of seeds 0-4 (fillet, lap, pipe on plate, saddle); past a part's end it sees the table or a
+# fixture 5-260 mm beyond.
 CORNER_PAST_M = 0.004
 
 
@@ -379,7 +378,7 @@ def _part_end_step(extension: Extension, end: SeamEnd) -> Step | None:
 
 
 def _corner_ends_ahead(extension: Extension, last_point, direction, bend) -> bool:
-    """Whether the camera sees past an inside corner's seam line (ON_SURFACE) at half or more of the
+    """Whether the camera sees past an inside corner's seam line (joints.ON_SURFACE) at half or more of the
     points one step apart along its predicted curve within part_end_reach_m ahead (ViewBuffer.
     seen_past, by CORNER_PAST_M); False without a single camera (no view)."""
     view = extension.surface.view

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from weldseam.pipeline.joints import JointKind
+from weldseam.pipeline.joints import ON_SURFACE
 from weldseam.pipeline.trace import TracedSeam
 
 RANSAC_TRIALS = 200
@@ -67,7 +67,7 @@ def lies_on(seam: TracedSeam, plane, tolerance_m: float) -> bool:
     """Whether an inside corner's or a lap's points lie on `plane` (their median distance at most
     `tolerance_m`): where a part stands or lies on the table, even where its side is hard to see."""
     centre, normal = plane
-    return seam.joint in (JointKind.FILLET, JointKind.LAP) and np.median(np.abs((seam.positions_m - centre) @ normal)) <= tolerance_m
+    return seam.joint in ON_SURFACE and np.median(np.abs((seam.positions_m - centre) @ normal)) <= tolerance_m
 
 
 def formed_with(seam: TracedSeam, surface, plane, tolerance_m: float) -> bool:

@@ -40,6 +40,11 @@ TIE_FRACTION = 0.2
 # joint when its outline lies within TIE_FRACTION of such a fit's.
 SQUARE_OPENING = JointKind.SQUARE_BUTT
 FLANKED = frozenset({JointKind.V_GROOVE, JointKind.BEVEL})
+# The joints whose seam point lies on the part's surfaces, where two faces meet inside (a groove's
+# lies in the air over its opening, an outside corner's in its V): where a part stands on the
+# table such a seam lies on the table (support), and where the camera sees past the seam line the
+# part has ended (extend).
+ON_SURFACE = frozenset({JointKind.FILLET, JointKind.LAP})
 
 
 def fit_profile(
