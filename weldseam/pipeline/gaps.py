@@ -61,15 +61,11 @@ def gap_midpoints(points: np.ndarray, camera_m: np.ndarray, *, max_width_m: floa
     owner = np.full(rows * columns, -1, dtype=np.int32)
     owner[(bins[:, 0] - low[0]) * columns + (bins[:, 1] - low[1])] = np.arange(len(points), dtype=np.int32)
     image = owner.reshape(rows, columns)
+    filled = image >= 0
     middles = []
-    for lines in (image, image.T):
-        flat = _with_neighbour_lines(lines).ravel()
-        filled = np.flatnonzero(flat >= 0)
-        length = lines.shape[1]
-        first, second = filled[:-1], filled[1:]
-        crossing = (first // length == second // length) & (second - first - 1 >= MIN_EMPTY_BINS)
-        a, b = flat[first[crossing]], flat[second[crossing]]
-        ends_a, ends_b = points[a], points[b]
+    for lines, occupied in ((image, filled), (image.T, np.ascontiguousarray(filled.T))):
+        first, second = _crossings(occupied)
+        ends_a, ends_b = points[_owner(lines, first)], points[_owner(lines, second)]
         ranges = np.maximum(np.linalg.norm(ends_a - camera_m, axis=1), np.linalg.norm(ends_b - camera_m, axis=1))
         footprint = pitch_rad * ranges
         width = np.linalg.norm(ends_b - ends_a, axis=1)
@@ -78,14 +74,30 @@ def gap_midpoints(points: np.ndarray, camera_m: np.ndarray, *, max_width_m: floa
     return np.vstack(middles)
 
 
-def _with_neighbour_lines(lines: np.ndarray) -> np.ndarray:
-    """The image `lines` (rows of bins holding a point's index, -1 where empty) with each empty
-    bin taking the point of the bin above it, else below it: a pixel that noise in its direction
-    put into the next line of bins fills no line's run with a false gap (a run is empty in three
-    lines at once), while a gap, a line across the lines, leaves all three empty."""
-    above, below = np.full_like(lines, -1), np.full_like(lines, -1)
-    above[1:], below[:-1] = lines[:-1], lines[1:]
-    return np.where(lines >= 0, lines, np.where(above >= 0, above, below))
+def _crossings(filled: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(first, second) flat positions of the ends of each run of at least MIN_EMPTY_BINS empty bins
+    within a line of the image whose `filled` (lines, bins) bool says which bins hold a point. A bin
+    counts as filled where the bin above or below it is (a pixel that noise in its direction put
+    into the next line of bins fills no line's run with a false gap: a run is empty in three lines
+    at once), while a gap, a line across the lines, leaves all three empty."""
+    near = filled.copy()
+    near[1:] |= filled[:-1]
+    near[:-1] |= filled[1:]
+    positions = np.flatnonzero(near)
+    length = filled.shape[1]
+    first, second = positions[:-1], positions[1:]
+    crossing = (first // length == second // length) & (second - first - 1 >= MIN_EMPTY_BINS)
+    return first[crossing], second[crossing]
+
+
+def _owner(lines: np.ndarray, flat: np.ndarray) -> np.ndarray:
+    """The point index at flat positions of the image `lines` (-1 where empty): the bin's own, else
+    the bin above's, else the bin below's (as _crossings counts them filled)."""
+    row, column = np.divmod(flat, lines.shape[1])
+    own = lines[row, column]
+    above = np.where(row > 0, lines[np.maximum(row - 1, 0), column], -1)
+    below = np.where(row < lines.shape[0] - 1, lines[np.minimum(row + 1, lines.shape[0] - 1), column], -1)
+    return np.where(own >= 0, own, np.where(above >= 0, above, below))
 
 
 def image_directions(points: np.ndarray, camera_m: np.ndarray) -> np.ndarray:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import itertools
 
 import numpy as np
 from scipy.sparse.csgraph import connected_components
@@ -83,12 +84,17 @@ def cluster_candidates(
     if len(indices) == 0:
         return [], []
     _, labels = connected_components(radius_graph(points[indices], tolerance_m), directed=False)
+    order = np.argsort(labels, kind="stable")
+    grouped = indices[order]
+    starts = np.r_[0, np.flatnonzero(np.diff(labels[order])) + 1]
+    groups = np.split(grouped, starts[1:])
+    # A cluster whose bounding box's diagonal is under tolerance_m extends less than that along any
+    # axis: a speck, dropped without its principal axis (most clusters are specks of noise).
+    low, high = (reduce.reduceat(points[grouped], starts, axis=0) for reduce in (np.minimum, np.maximum))
     clusters, short = [], []
-    for label in np.unique(labels):
-        members = indices[labels == label]
+    for members in itertools.compress(groups, np.linalg.norm(high - low, axis=1) >= tolerance_m):
         centred = points[members] - points[members].mean(axis=0)
-        axis = np.linalg.svd(centred, full_matrices=False)[2][0] if len(members) > 1 else np.zeros(3)
-        extent = np.ptp(centred @ axis) if len(members) > 1 else 0.0
+        extent = np.ptp(centred @ np.linalg.svd(centred, full_matrices=False)[2][0])
         if extent >= min_length_m:
             clusters.append(members)
         elif extent >= tolerance_m:
