@@ -92,13 +92,16 @@ def fit(profile: SortedProfile) -> ProfileFit | NoFit:
         return NoFit("too few points for two faces")
     # Points seen through the root gap, far below the roof, pull the least-squares break off the
     # ridge by millimetres: the faces are split again where their robust lines meet.
-    faces = _faces(u, w, split, min_fraction=0.0)
-    faces = None if faces is None else _faces(u, w, _apex_split(u, faces, split), MIN_INLIER_FRACTION)
+    first = _faces(u, w, split, min_fraction=0.0)
+    faces = None if first is None else _faces(u, w, _apex_split(u, first, split), MIN_INLIER_FRACTION)
     if faces is None:
         return NoFit("a face is not a straight line")
-    (a_left, b_left, sigma_left), (a_right, b_right, sigma_right) = faces
+    (a_left, b_left, sigma_left, _), (a_right, b_right, sigma_right, _) = faces
     if not (b_left > 0 > b_right):  # convex: both faces fall away from the ridge
         return NoFit("the two faces do not form a convex ridge")
+    # Checked last: most profiles are no ridge, and the bow of each face costs a parabola fit.
+    if any(_curved(*on) for *_, on in (*first, *faces)):
+        return NoFit("a face is not a straight line")
     to_left, to_right = unit(np.array([-1.0, -b_left])), unit(np.array([1.0, b_right]))
     roof = np.degrees(np.arccos(np.clip(to_left @ to_right, -1.0, 1.0)))
     if not (MIN_ROOF_DEG <= roof <= MAX_ROOF_DEG):
@@ -239,16 +242,17 @@ def _apex_split(u: np.ndarray, faces: list, split: int) -> int:
     """The index of the first point right of where the faces' lines meet (the ridge), or `split`
     where they meet in no place that leaves each side its points (parallel lines, or near a
     window's edge)."""
-    (a_left, b_left, _), (a_right, b_right, _) = faces
+    (a_left, b_left, *_), (a_right, b_right, *_) = faces
     if b_left == b_right:
         return split
     index = int(np.searchsorted(u, (a_right - a_left) / (b_left - b_right)))
     return index if 2 * MIN_SIDE_POINTS <= index <= len(u) - 2 * MIN_SIDE_POINTS else split
 
 
-def _face(u: np.ndarray, w: np.ndarray, away: int, min_fraction: float) -> tuple[float, float, float] | None:
-    """(intercept, slope, noise) of one face's line, or None where it is not straight (fewer than
-    `min_fraction` of the points on it): started through the half of its points farthest from the
+def _face(u: np.ndarray, w: np.ndarray, away: int, min_fraction: float) -> tuple | None:
+    """(intercept, slope, noise, (u, w) of the points on it) of one face's line, or None where too
+    few points lie on it (fewer than `min_fraction`; whether they bow off it is for the caller to
+    ask: _curved): started through the half of its points farthest from the
     break (toward `away`; the V beside the ridge does not tilt it), then twice the points within
     max(3 sigma, SURFACE_BAND_M) of the line and the line through them, sigma the noise of the
     points the line was fitted to (the V's and the other face's points beside it are not noise)."""
@@ -261,10 +265,11 @@ def _face(u: np.ndarray, w: np.ndarray, away: int, min_fraction: float) -> tuple
         inliers = np.abs(residual) <= max(3 * noise(residual[inliers]), SURFACE_BAND_M)
         if np.count_nonzero(inliers) < MIN_SIDE_POINTS:
             return None
-    if fraction(inliers) < min_fraction or _curved(u[inliers], w[inliers]):
+    if fraction(inliers) < min_fraction:
         return None
-    intercept, slope = line(u[inliers], w[inliers])
-    return intercept, slope, noise(w[inliers] - (intercept + slope * u[inliers]))
+    on = u[inliers], w[inliers]
+    intercept, slope = line(*on)
+    return intercept, slope, noise(on[1] - (intercept + slope * on[0])), on
 
 
 def _curved(u: np.ndarray, w: np.ndarray) -> bool:
