@@ -25,6 +25,12 @@ MIN_BEND_RADIUS_M = 0.03
 # 25 mm ring. Near the anchor, within CURVE_FLOOR_M (half an extension step): the curve's noise.
 ONE_FACE_DRIFT = 0.08
 CURVE_FLOOR_M = 0.001
+# Where the camera sees this much past the seam line of a joint whose seam point lies on the part's
+# surfaces (joints.ON_SURFACE), the part is not there: their own faces, with 1-2 mm of ripple and
+# depth steps, lie within -5..+1.6 mm of it along the line of sight over the corner ends of seeds
+# 0-4 (fillet, lap, pipe on plate, saddle); past a part's end it sees the table or a fixture
+# 5-260 mm beyond.
+CORNER_PAST_M = 0.004
 
 
 def end_direction(points: np.ndarray, at_start: bool) -> np.ndarray:

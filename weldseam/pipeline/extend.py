@@ -33,7 +33,7 @@ from weldseam.geometry import arc_lengths, bend_corner, even_indices, polyline_l
 from weldseam.pipeline.bridge import GrooveTemplate, groove_template, part_ends_ahead
 from weldseam.pipeline.carried import CornerTemplate, corner_template
 from weldseam.pipeline.ends import (
-    END_BASELINE_M, TANGENT_BASELINE_M, SeamLine, ahead, end_curve, last_full, on_curve, seam_line,
+    CORNER_PAST_M, END_BASELINE_M, TANGENT_BASELINE_M, SeamLine, ahead, end_curve, last_full, on_curve, seam_line,
 )
 from weldseam.pipeline.joints import ON_SURFACE, JointKind
 from weldseam.pipeline.parallel import map_shared
@@ -52,12 +52,6 @@ LINE_AIM_DEG = 5.0
 # A corner's faces are carried on from this many sections over the last TANGENT_BASELINE_M of
 # arc up to its last fit with both faces seen (SeamEnd.corner).
 CORNER_FITS = 8
-# Where the camera sees this much past the seam line ahead of a joint whose seam point lies on the
-# part's surfaces (joints.ON_SURFACE), the part is not there: their own faces, with 1-2 mm of
-# ripple and depth steps, lie within -5..+1.6 mm of it along the line of sight over the corner ends
-# of seeds 0-4 (fillet, lap, pipe on plate, saddle); past a part's end it sees the table or a
-# fixture 5-260 mm beyond.
-CORNER_PAST_M = 0.004
 
 
 @dataclass(frozen=True)

@@ -7,8 +7,8 @@ import numpy as np
 
 from weldseam.geometry import arc_lengths, polyline_length, unit
 from weldseam.pipeline.bridge import groove_bottom, sees_past_end
-from weldseam.pipeline.ends import ahead, end_curve, offsets
-from weldseam.pipeline.joints import JointGeometry, JointKind, one_joint, recentred
+from weldseam.pipeline.ends import CORNER_PAST_M, ahead, end_curve, offsets
+from weldseam.pipeline.joints import ON_SURFACE, JointGeometry, JointKind, one_joint, recentred
 from weldseam.pipeline.section import RECENTRE_M, FineSurface, PointFlag, SectionFit
 from weldseam.pipeline.seek import Extension, next_fit, plain_fit
 from weldseam.pipeline.trace import Hole
@@ -72,10 +72,10 @@ def across_hole(extension: Extension, last_point, last_axis, aims) -> list[Secti
     section or two of the plate's end, and the scan then sees past the plate right after the fits
     (a stray fit inside a longer hole has nothing after it). The hole is bridged by a cubic
     Hermite curve between the two ends, leaving along the aim whose prediction lies nearest the
-    fit (_arrival: how it arrives; torch axes interpolated), and that curve must be empty: no more
-    than HOLE_STRAYS scan points within HOLE_RADIUS_M of it. For a groove the seam point is the
-    centre of the opening, in the air over the groove; where a plate's surface crosses the line,
-    the groove has ended, and one ahead is another seam."""
+    fit (_arrival: how it arrives; torch axes interpolated), and that curve must be empty (_empty:
+    for a groove, whose seam point lies in the air over its opening, no scan point on it; for an
+    inside corner, whose seam point lies on the part's surfaces, none between the hole's edges)
+    and in sight (hidden)."""
     params = extension.params
     step = params.step_m
     leads = _leads(last_point, aims)
@@ -155,13 +155,12 @@ def _arrival(run: list[SectionFit], travel: np.ndarray, bend: np.ndarray) -> np.
 
 def _bridge(extension: Extension, last_point, last_axis, leaving, run: list[SectionFit], arrival):
     """The bridged points from `last_point` (leaving along `leaving`) to the first fit of `run`
-    (arriving along `arrival`) on a cubic Hermite curve, then `run`; None when scan points lie on
-    that curve or something in front of it hides it (hidden)."""
+    (arriving along `arrival`) on a cubic Hermite curve, then `run`; None when that curve is not
+    empty (_empty) or something in front of it hides it (hidden)."""
     fit = run[0]
     line = hermite(last_point, leaving, fit.point_m, arrival, HOLE_RADIUS_M)
-    if extension.surface.tree.query_ball_point(line, HOLE_RADIUS_M, return_length=True).sum() > HOLE_STRAYS:
-        return None
-    if hidden(line, extension.surface):
+    surface = extension.surface
+    if not _empty(line, extension.joint, surface, extension.params.max_skip_m) or hidden(line, surface):
         return None
     bridge = hermite(last_point, leaving, fit.point_m, arrival, extension.params.step_m)
     weights = np.linspace(0.0, 1.0, len(bridge) + 2)[1:-1, None]
@@ -170,6 +169,31 @@ def _bridge(extension: Extension, last_point, last_axis, leaving, run: list[Sect
     interpolated = int(PointFlag.INTERPOLATED)
     return [SectionFit(extension.joint, p, a, geometry, bridged=True, flags=interpolated)
             for p, a in zip(bridge, tilts)] + run  # fmt: skip
+
+
+def _empty(line: np.ndarray, joint: JointKind, surface: FineSurface, max_edge_m: float) -> bool:
+    """Whether the seam line across a hole (K, 3) is empty: no more than HOLE_STRAYS scan points
+    within HOLE_RADIUS_M of it. A groove's seam point lies in the air over its opening: where a
+    plate's surface crosses the line, the groove has ended. An inside corner's (joints.ON_SURFACE)
+    lies on the part's surfaces, which go on from the hole's edges to the first fits (the sections
+    there, cut by the hole, fail): the hole is the stretch from the line's first point with no scan
+    point near to its last, at least HOLE_EDGE_M long and empty, the edges on either side at most
+    `max_edge_m` long (the failed sections an extension steps over anyway); where the camera sees
+    more than HOLE_STRAYS of the line's points CORNER_PAST_M or more beyond, the part has ended
+    (with one camera, surface.view)."""
+    near = surface.tree.query_ball_point(line, HOLE_RADIUS_M, return_length=True)
+    if joint not in ON_SURFACE:
+        return int(near.sum()) <= HOLE_STRAYS
+    free = np.flatnonzero(near == 0)
+    if len(free) == 0:
+        return False
+    arc = arc_lengths(line)
+    first, last = free[0], free[-1]
+    if arc[last] - arc[first] < HOLE_EDGE_M or int(near[first : last + 1].sum()) > HOLE_STRAYS:
+        return False
+    if max(arc[first], arc[-1] - arc[last]) > max_edge_m:
+        return False
+    return surface.view is None or int(np.count_nonzero(surface.view.seen_past(line, CORNER_PAST_M))) <= HOLE_STRAYS
 
 
 def _part_ends_after(extension: Extension, fit, travel, last_point, last_axis, direction) -> bool:
