@@ -143,3 +143,31 @@ def test_a_groove_over_a_blocks_edge_keeps_the_travel_of_each_face_close_to_the_
     from_edge = np.linalg.norm(new, axis=1)
     assert error_deg[(from_edge >= 0.008) & (from_edge < 0.012)].max() < 4.0
     assert error_deg[from_edge >= 0.012].max() < 2.0
+
+
+def test_a_shallow_corners_bumps_across_are_smoothed_over_its_across_spread_and_its_axes_are_not():
+    # A 150-degree valley's point moves 3.7 times farther across than its faces move in depth: bumps
+    # of 1 mm across, 28 mm long, on a straight seam; its torch axis turns 20 degrees over 40 mm.
+    positions = line(0.002, 0.2)
+    positions[:, 1] = 0.001 * np.sin(2 * np.pi * positions[:, 0] / 0.028)
+    turn = np.radians(20.0) * np.clip((positions[:, 0] - 0.08) / 0.04, 0.0, 1.0)
+    axes = np.column_stack([np.zeros(len(turn)), np.sin(turn), -np.cos(turn)])
+    plain, plain_frames = resample_seam(positions, axes, spacing_m=0.002, smoothing_m=0.003, closed=False)
+    shallow, shallow_frames = resample_seam(positions, axes, spacing_m=0.002, smoothing_m=0.003, closed=False,
+                                            across_spread=3.7)  # fmt: skip
+    middle = slice(len(plain) // 5, -len(plain) // 5)  # a window's reach from the ends
+    assert np.abs(shallow[middle, 1]).max() < 0.25 * np.abs(plain[middle, 1]).max()
+    assert np.abs(plain[middle, 1]).max() > 0.0007  # a corner known as well across keeps them
+    work = np.arctan2(shallow_frames[middle, 1, 2], -shallow_frames[middle, 2, 2])
+    assert np.allclose(work, np.arctan2(plain_frames[middle, 1, 2], -plain_frames[middle, 2, 2]), atol=np.radians(0.5))
+
+
+def test_a_shallow_corner_on_a_tight_curve_is_smoothed_no_wider_than_its_curve_allows():
+    # A saddle's obtuse corner on a 30 mm curve: a wider Gaussian would cut the curve by s^2 / 2R.
+    radius = 0.03
+    angles = np.linspace(0, 2 * np.pi, 95, endpoint=False)
+    positions = radius * np.column_stack([np.cos(angles), np.sin(angles), np.zeros_like(angles)])
+    axes = np.tile([0.0, 0.0, -1.0], (len(positions), 1))
+    plain, _ = resample_seam(positions, axes, spacing_m=0.002, smoothing_m=0.003, closed=True)
+    shallow, _ = resample_seam(positions, axes, spacing_m=0.002, smoothing_m=0.003, closed=True, across_spread=2.5)
+    assert abs(np.linalg.norm(shallow[:, :2], axis=1).mean() - np.linalg.norm(plain[:, :2], axis=1).mean()) < 2e-5

@@ -13,29 +13,44 @@ from weldseam.geometry import arc_lengths, frames_from_axes, unit
 # mm of a groove's 90-degree turn over a block's edge.
 WIDE_TRAVEL = 2.0
 KINK_M = 0.0005
+# A Gaussian of sigma s moves a curve of radius R inward by about s^2 / 2R: a shallow corner's
+# positions are smoothed wider only as far as that stays under this (a saddle's 30-40 mm curve
+# allows no more than the usual sigma; a valley along a tube's length, many times it).
+CURVE_CUT_M = 0.0001
 
 
 def resample_seam(
-    positions: np.ndarray, torch_axes: np.ndarray, *, spacing_m: float, smoothing_m: float, closed: bool
+    positions: np.ndarray, torch_axes: np.ndarray, *, spacing_m: float, smoothing_m: float, closed: bool,
+    across_spread: float = 1.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Positions (K, 3) and tool frames (K, 3, 3) every `spacing_m` of arc length.
 
     Positions and torch axes are first smoothed with a Gaussian of sigma `smoothing_m` in
     arc length (per-section noise averages out; a 90-degree bend is rounded by about
-    sigma). Between knots, positions are interpolated linearly and torch axes by normalised
-    linear interpolation (slerp to 1e-4 rad for neighbouring axes within 10 degrees). Frame
-    y is the travel direction of the resampled line, z the torch axis made perpendicular to
-    it, x = y cross z. The path carries the work angle only: the sections measure the axis
-    well across the seam, but its tilt along the seam comes from averaged normals that lean
-    at grazing views (up to 10 degrees on a pipe's limb); a travel angle is the robot
-    shaping's job.
+    sigma), the positions of a seam whose points are known `across_spread` times less well across
+    than its faces are in depth (a shallow corner: JointGeometry.across_spread) over up to that many
+    times as much: its faces' ripple and depth steps move its point across by as much more, in
+    bumps a few cm long along it (a 130-150 degree valley: 1-2 mm, where its faces move 0.5); as
+    far as its curve allows (CURVE_CUT_M).
+    Between knots, positions are interpolated linearly and torch axes by normalised linear
+    interpolation (slerp to 1e-4 rad for neighbouring axes within 10 degrees). Frame y is the
+    travel direction of the resampled line, z the torch axis made perpendicular to it, x = y
+    cross z. The path carries the work angle only: the sections measure the axis well across the
+    seam, but its tilt along the seam comes from averaged normals that lean at grazing views (up
+    to 10 degrees on a pipe's limb); a travel angle is the robot shaping's job.
     """
     arc = arc_lengths(positions, closed)
     total = arc[-1]
     if closed:
         positions = np.vstack([positions, positions[:1]])
         torch_axes = np.vstack([torch_axes, torch_axes[:1]])
-    positions, torch_axes = _smooth(positions, torch_axes, arc, smoothing_m, total if closed else None)
+    period = total if closed else None
+    torch_axes = unit(_smooth(torch_axes, arc, smoothing_m, period))
+    line = _smooth(positions, arc, smoothing_m, period)
+    wide = smoothing_m * across_spread
+    if wide > smoothing_m:
+        wide = min(wide, np.sqrt(2 * _radius_m(line, arc, wide) * CURVE_CUT_M))
+    positions = _smooth(positions, arc, wide, period) if wide > smoothing_m else line
     count = max(int(round(total / spacing_m)), 1)
     samples = np.linspace(0.0, total, count, endpoint=False) if closed else np.linspace(0.0, total, count + 1)
     new_positions = np.column_stack([np.interp(samples, arc, positions[:, k]) for k in range(3)])
@@ -46,6 +61,21 @@ def resample_seam(
                             sampled_arc[-1] if closed else None)  # fmt: skip
     new_axes = unit(new_axes - np.sum(new_axes * travel, axis=1, keepdims=True) * travel)
     return new_positions, frames_from_axes(new_axes, travel)
+
+
+def _radius_m(positions: np.ndarray, arc: np.ndarray, spacing_m: float) -> float:
+    """The median radius of curvature (m) of a line (K, 3) at arc lengths `arc` (K,): of the circles
+    through its points at three consecutive arc lengths 2 `spacing_m` apart (inf on a straight
+    line, or a line too short for three)."""
+    samples = np.arange(0.0, arc[-1] + 1e-12, 2 * spacing_m)
+    if len(samples) < 3:
+        return float("inf")
+    points = np.column_stack([np.interp(samples, arc, positions[:, k]) for k in range(3)])
+    a, b, c = points[:-2], points[1:-1], points[2:]
+    twice_area = np.linalg.norm(np.cross(b - a, c - a), axis=1)
+    sides = np.linalg.norm(b - a, axis=1) * np.linalg.norm(c - b, axis=1) * np.linalg.norm(c - a, axis=1)
+    with np.errstate(divide="ignore"):
+        return float(np.median(np.where(twice_area > 0, sides / (2 * twice_area), np.inf)))
 
 
 def _steady_travel(positions: np.ndarray, arc: np.ndarray, reach_m: float, period: float | None) -> np.ndarray:
@@ -102,11 +132,12 @@ def _travel(positions: np.ndarray, arc: np.ndarray, reach_m: float, period: floa
     return unit(coefficients[:, 1, :] + 2 * (arc - centre)[:, None] * coefficients[:, 2, :]), rms
 
 
-def _smooth(positions, axes, arc, sigma_m, period):
-    """Gaussian-weighted means along arc length (circular distance when `period` is set).
-    Near an open end the window is one-sided, so the end point stays where it was measured."""
+def _smooth(values, arc, sigma_m, period):
+    """Gaussian-weighted means (K, 3) of `values` along arc length (circular distance when
+    `period` is set). Near an open end the window is one-sided, so the end point stays where it
+    was measured."""
     if sigma_m <= 0 or len(arc) < 3:
-        return positions, axes
+        return values
     distance = arc[:, None] - arc[None, :]
     if period is not None:
         distance = (distance + period / 2) % period - period / 2
@@ -117,7 +148,7 @@ def _smooth(positions, axes, arc, sigma_m, period):
         reach = np.minimum(arc, arc[-1] - arc)  # keep the window symmetric: no pull at the ends
         weights *= np.abs(distance) <= np.maximum(reach, 1e-12)[:, None] + 1e-12
     weights /= weights.sum(axis=1, keepdims=True)
-    return weights @ positions, unit(weights @ axes)
+    return weights @ values
 
 
 def hole_warning(seam_id: int, hole) -> str:

@@ -313,13 +313,14 @@ def _split(state: PlanState, c: PlanConfig) -> None:
 
 
 def _resample(state: PlanState, c: PlanConfig) -> None:
-    """Poses every resample.spacing_m along each seam, each with its confidence; a warning for
-    each hole crossed and for a corner with one face unseen."""
+    """Poses every resample.spacing_m along each seam (a shallow corner's positions smoothed over
+    more: its across_spread), each with its confidence; a warning for each hole crossed and for a
+    corner with one face unseen."""
     spacing = c.resample.spacing_m
     for seam in state.seams:
         positions, rotations = resample.resample_seam(
             seam.positions_m, seam.torch_axes, spacing_m=spacing, smoothing_m=c.resample.smoothing_m,
-            closed=seam.closed,
+            closed=seam.closed, across_spread=seam.across_spread,
         )
         flags = resample.resample_flags(seam.positions_m, seam.point_flags, spacing_m=spacing, closed=seam.closed)
         seam_id = len(state.paths)
