@@ -554,3 +554,47 @@ def test_a_fillet_stops_where_the_camera_sees_past_the_parts_end_without_seeking
     blind = CountingSurface(FineSurface(points, cKDTree(points), section_params(PlanConfig()), None))
     assert np.array_equal(extend_seam(seam, blind, params).positions_m, stopped)
     assert blind.fitted - seen.fitted >= round((params.max_hole_m - params.max_skip_m) / STEP_M)
+
+
+
+def test_a_hole_on_an_inside_corners_line_is_the_stretch_without_data_between_its_edges():
+    """A seam line 24 mm across a hole (1.5 mm apart). An inside corner's seam point lies on the
+    part's surfaces, and the data there goes on from the hole's edge for a few mm where the sections
+    fail: the line is empty between; a groove's seam line, in the air over its opening, is not."""
+    from scipy.spatial import cKDTree
+
+    from weldseam.config import PlanConfig
+    from weldseam.pipeline.holes import _empty
+    from weldseam.pipeline.occlusion import ViewBuffer
+    from weldseam.pipeline.section import FineSurface, section_params
+
+    line = np.column_stack([np.arange(0.0015, 0.024, 0.0015), np.zeros(15), np.zeros(15)])
+    edge = np.column_stack([np.arange(0.019, 0.0245, 0.0005), np.zeros(12), np.zeros(12)])  # the last 5 mm
+    far = np.column_stack([np.arange(-0.02, 0.0, 0.0005), np.zeros(40), np.zeros(40)])  # the surface before
+
+    def surface(points, view=None):
+        return FineSurface(points, cKDTree(points), section_params(PlanConfig()), view)
+
+    points = np.vstack([far, edge])
+    assert _empty(line, JointKind.FILLET, surface(points), max_edge_m=0.012)
+    assert not _empty(line, JointKind.V_GROOVE, surface(points), max_edge_m=0.012), "a plate crosses a groove's line"
+    assert not _empty(line, JointKind.FILLET, surface(points), max_edge_m=0.004), "more data at an edge than a skip"
+    along = np.column_stack([np.arange(0.0, 0.025, 0.0005), np.zeros(50), np.zeros(50)])
+    assert not _empty(line, JointKind.FILLET, surface(np.vstack([points, along])), max_edge_m=0.012), "no hole"
+    # The camera above sees the table 10 mm below the line: the part has ended, no hole.
+    table_x, table_y = grid((-0.01, 0.035), (-0.01, 0.01), pitch=0.0005)
+    table = np.column_stack([table_x, table_y, np.full(len(table_x), -0.01)])
+    seen = np.vstack([points, table])
+    view = ViewBuffer.build(seen, np.array([0.012, 0.0, 0.4]), 0.0005)
+    assert not _empty(line, JointKind.FILLET, surface(seen, view), max_edge_m=0.012)
+    nothing_past = ViewBuffer.build(points, np.array([0.012, 0.0, 0.4]), 0.0005)
+    assert _empty(line, JointKind.FILLET, surface(points, nothing_past), max_edge_m=0.012)
+
+
+def test_an_inside_corner_is_carried_across_a_hole_only_onto_a_corner_with_both_faces_seen():
+    from weldseam.pipeline.holes import _measured
+
+    one_face = SectionFit(JointKind.FILLET, np.zeros(3), np.array([0.0, 0.0, -1.0]), flags=int(PointFlag.ONE_FACE))
+    assert not _measured(JointKind.FILLET, one_face), "maybe a surface ending in a shadow"
+    assert _measured(JointKind.FILLET, replace(one_face, flags=0))
+    assert _measured(JointKind.V_GROOVE, replace(one_face, kind=JointKind.V_GROOVE))

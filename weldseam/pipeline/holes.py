@@ -67,10 +67,11 @@ def across_hole(extension: Extension, last_point, last_axis, aims) -> list[Secti
     it added). The first section that fits the joint (and is no other kind's, fitted for every
     joint: _same_joint) within SIDEWAYS_SHARE of its distance sideways and DEPTH_SHARE in depth of
     any aim's prediction (the fits at a hole's edge may lean, and the aim from before them finds
-    the seam where the end's own tangent misses it: hole_aim) must be followed by HOLE_CONFIRM - 1
-    more fits in a row, or by the part's end (_part_ends_after): a hole can reach to within a
-    section or two of the plate's end, and the scan then sees past the plate right after the fits
-    (a stray fit inside a longer hole has nothing after it). The hole is bridged by a cubic
+    the seam where the end's own tangent misses it: hole_aim; an inside corner's with both faces
+    seen: _measured) must be followed by HOLE_CONFIRM - 1 more fits in a row, or by the part's
+    end (_part_ends_after): a hole can reach to within a section or two of the plate's end, and
+    the scan then sees past the plate right after the fits (a stray fit inside a longer hole has
+    nothing after it). The hole is bridged by a cubic
     Hermite curve between the two ends, leaving along the aim whose prediction lies nearest the
     fit (_arrival: how it arrives; torch axes interpolated), and that curve must be empty (_empty:
     for a groove, whose seam point lies in the air over its opening, no scan point on it; for an
@@ -82,7 +83,7 @@ def across_hole(extension: Extension, last_point, last_axis, aims) -> list[Secti
     for distance in np.arange(params.max_skip_m + step, params.max_hole_m + step / 2, step):
         predictions = _predictions(aims, leads, distance)
         found = _fit_ahead(extension, predictions, last_axis)
-        if found is None or not _same_joint(extension, *found):
+        if found is None or not _measured(extension.joint, found[0]) or not _same_joint(extension, *found):
             continue
         fit = found[0]
         near = []
@@ -104,6 +105,14 @@ def across_hole(extension: Extension, last_point, last_axis, aims) -> list[Secti
             return None
         return _bridge(extension, last_point, last_axis, leaving, run, _arrival(run, travel, bend))
     return None
+
+
+def _measured(joint: JointKind, fit: SectionFit) -> bool:
+    """Whether a fit beyond a hole shows the joint itself: an inside corner's (joints.ON_SURFACE)
+    with both faces seen. A corner with one face unseen may be where a surface ends in a shadow
+    (past a pipe's silhouette), and across a hole nothing ties it to the seam (the extension
+    follows such corners only near the curve of the seam's full fits)."""
+    return joint not in ON_SURFACE or not fit.flags & PointFlag.ONE_FACE
 
 
 def _leads(last_point, aims) -> list[float]:
