@@ -12,6 +12,12 @@ def line(step_m=0.0013, length_m=0.1):
     return np.column_stack([x, np.zeros_like(x), np.zeros_like(x)])
 
 
+def circle(radius_m, count):
+    """`count` points evenly round a circle of `radius_m` about the z axis in z = 0."""
+    angles = np.linspace(0, 2 * np.pi, count, endpoint=False)
+    return radius_m * np.column_stack([np.cos(angles), np.sin(angles), np.zeros_like(angles)])
+
+
 def test_a_straight_seam_gets_poses_every_spacing_on_the_line_with_travel_along_it():
     positions = line()
     axes = np.tile([0.0, 0.0, -1.0], (len(positions), 1))
@@ -47,8 +53,7 @@ def test_position_noise_does_not_tip_the_torch_axis():
 
 def test_a_closed_circle_stays_closed_and_round():
     radius = 0.05
-    angles = np.linspace(0, 2 * np.pi, 230, endpoint=False)
-    positions = radius * np.column_stack([np.cos(angles), np.sin(angles), np.zeros_like(angles)])
+    positions = circle(radius, 230)
     axes = np.tile([0.0, 0.0, -1.0], (len(positions), 1))
     new, frames = resample_seam(positions, axes, spacing_m=0.002, smoothing_m=0.003, closed=True)
     steps = np.linalg.norm(np.diff(np.vstack([new, new[:1]]), axis=0), axis=1)
@@ -164,9 +169,7 @@ def test_a_shallow_corners_bumps_across_are_smoothed_over_its_across_spread_and_
 
 def test_a_shallow_corner_on_a_tight_curve_is_smoothed_no_wider_than_its_curve_allows():
     # A saddle's obtuse corner on a 30 mm curve: a wider Gaussian would cut the curve by s^2 / 2R.
-    radius = 0.03
-    angles = np.linspace(0, 2 * np.pi, 95, endpoint=False)
-    positions = radius * np.column_stack([np.cos(angles), np.sin(angles), np.zeros_like(angles)])
+    positions = circle(0.03, 95)
     axes = np.tile([0.0, 0.0, -1.0], (len(positions), 1))
     plain, _ = resample_seam(positions, axes, spacing_m=0.002, smoothing_m=0.003, closed=True)
     shallow, _ = resample_seam(positions, axes, spacing_m=0.002, smoothing_m=0.003, closed=True, across_spread=2.5)

@@ -33,7 +33,8 @@ from weldseam.geometry import arc_lengths, bend_corner, even_indices, polyline_l
 from weldseam.pipeline.bridge import GrooveTemplate, groove_template, part_ends_ahead
 from weldseam.pipeline.carried import CornerTemplate, corner_template
 from weldseam.pipeline.ends import (
-    CORNER_PAST_M, END_BASELINE_M, TANGENT_BASELINE_M, SeamLine, ahead, end_curve, last_full, on_curve, seam_line,
+    CORNER_PAST_M, END_BASELINE_M, TANGENT_BASELINE_M, SeamLine, ahead, end_curve, last_full, on_curve,
+    seam_line,
 )
 from weldseam.pipeline.joints import ON_SURFACE, JointKind
 from weldseam.pipeline.parallel import map_shared
