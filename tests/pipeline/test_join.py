@@ -57,6 +57,18 @@ def test_parallel_seams_do_not_join():
     assert len(join([piece(line([0, 0, 0], [0.1, 0, 0])), piece(line([0, 0.02, 0], [0.1, 0.02, 0]))])) == 2
 
 
+def test_a_piece_beside_the_seams_line_is_not_joined_into_it():
+    """Beside a tack weld a chain fits a groove 3.5 mm off the seam, its own line turned 45 degrees
+    from the seam's, 15 mm past one piece's end: no piece of the seam. Set on the line, it is."""
+    before, after = piece(line([0, 0, 0], [0.04, 0, 0])), piece(line([0.075, 0, 0], [0.12, 0, 0]))
+    off = line([0.055, 0.0035, 0], [0.055 + 0.02 * np.cos(0.8), 0.0035 + 0.02 * np.sin(0.8), 0])
+    seams = join([before, after, piece(off)])
+    assert len(seams) == 3
+    on_line = line([0.047, 0, 0], [0.068, 0, 0])
+    (seam,) = join([before, after, piece(on_line)])
+    assert np.abs(seam.positions_m[:, 1]).max() < 1e-9
+
+
 def test_an_overlapping_trace_keeps_only_what_it_adds():
     longer, shifted = piece(line([0, 0, 0], [0.1, 0, 0])), piece(line([0.06, 0.001, 0], [0.13, 0.001, 0]))
     kept = trim_overlaps([shifted, longer], tolerance_m=0.004)

@@ -16,10 +16,17 @@ from scipy.spatial import cKDTree
 
 from weldseam.config import JoinConfig
 from weldseam.geometry import bend_corner, corner_before, polyline_length, unit
-from weldseam.pipeline.ends import END_BASELINE_M, end_direction, last_full, on_curve
+from weldseam.pipeline.ends import END_BASELINE_M, ahead, end_curve, end_direction, last_full, offsets, on_curve
 from weldseam.pipeline.joints import one_joint
 from weldseam.pipeline.section import PointFlag
 from weldseam.pipeline.trace import TracedSeam, end_to_end
+
+# How far sideways of the curve one piece's end leads along that another piece of the same seam may
+# start (extend.max_skip_m's gap: an extension takes a fit 1.5 steps of 2 mm, or 15 % of the
+# distance, off its prediction).
+CONTINUE_FLOOR_M = 0.003
+CONTINUE_SHARE = 0.15
+CONTINUE_SLACK = 2.0
 
 
 def join_seams(seams: list[TracedSeam], params: JoinConfig) -> list[TracedSeam]:
@@ -163,10 +170,36 @@ def _joined(
                     or not _one_face_follows(first_way, second_way):
                 continue
             corner = _corner(a, out_a, b, out_b, join_m)
+            if corner is None and not _continues(first_way, second_way):
+                continue
             between = (np.empty((0, 3)), np.empty((0, 3)), np.empty(0, np.uint8)) if corner is None else \
                 (corner[None], unit(first_way.torch_axes[-1] + second_way.torch_axes[0])[None], np.zeros(1, np.uint8))
             best = (distance, end_to_end(first_way, between, second_way))
     return best
+
+
+def _continues(a: TracedSeam, b: TracedSeam) -> bool:
+    """Whether two pieces joined straight continue each other: b's start lies where a's end curve
+    leads (ends.ahead over the gap between them), and a's end where b's start curve leads back,
+    each within CONTINUE_SLACK x max(CONTINUE_FLOOR_M, CONTINUE_SHARE x the gap) sideways of the
+    torch axis (widened by the pieces' across_spread): twice what an extension takes across its
+    longest skip, as a piece's end curve, its bend read over its last few points, may miss by
+    that much across a wider gap. A piece too short for a direction defers to the other. Beside a
+    tack weld, a chain on its edge fits a groove 3-4 mm off the seam over 20 mm, its line turned
+    25 degrees from the seam's, and its curve misses the seam's end by 10 mm: no piece of it."""
+    for before, after in ((a, b), (b.reversed(), a.reversed())):
+        if polyline_length(before.positions_m) < END_BASELINE_M:
+            continue
+        last = before.positions_m[-1]
+        direction, bend = end_curve(before.positions_m)
+        target = after.positions_m[0]
+        distance = float(np.linalg.norm(target - last))
+        predicted, travel = ahead(last, direction, bend, distance)
+        _, sideways = offsets(target, predicted, travel, before.torch_axes[-1])
+        bound = max(CONTINUE_FLOOR_M, CONTINUE_SHARE * distance) * max(a.across_spread, b.across_spread)
+        if sideways > CONTINUE_SLACK * bound:
+            return False
+    return True
 
 
 def _one_face_follows(a: TracedSeam, b: TracedSeam) -> bool:
