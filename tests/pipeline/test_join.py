@@ -146,3 +146,16 @@ def test_corners_with_one_face_unseen_go_on_from_a_ring_only_along_it():
         seams = join([full, after])
         assert (len(seams) == 1) == joins
     assert np.abs(np.hypot(*off_ring[-1, :2]) - radius) > 0.003, "the straight piece ends well off the ring"
+
+
+def test_a_rough_piece_past_a_seams_end_joins_only_along_its_curve():
+    """Past a plate's end a loose bar lying against it gives grooves whose outline misses their
+    points (rough), in line with the seam at first, then turning off it: such a piece joins the
+    seam's full fits only where it follows their curve; a clean piece there joins."""
+    seam = piece(line([0, 0, 0], [0.1, 0, 0]))
+    turning = np.array([[0.112, 0.0012, 0], [0.115, 0.0025, 0], [0.118, 0.0045, 0], [0.121, 0.007, 0]])
+    rough = np.full(len(turning), int(PointFlag.ROUGH), np.uint8)
+    assert len(join([seam, replace(piece(turning), flags=rough)])) == 2
+    assert len(join([seam, piece(turning)])) == 1
+    in_line = line([0.11, 0, 0], [0.124, 0, 0])
+    assert len(join([seam, replace(piece(in_line), flags=np.full(len(in_line), int(PointFlag.ROUGH), np.uint8))])) == 1

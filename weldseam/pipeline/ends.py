@@ -124,11 +124,16 @@ def on_curve(anchor, direction, bend, arc_m: float, point, axis) -> bool:
     return sideways <= max(CURVE_FLOOR_M, ONE_FACE_DRIFT * arc_m)
 
 
+# What a full fit is not: a corner with one face unseen, or an outline that misses the points.
+NOT_FULL = PointFlag.ONE_FACE | PointFlag.ROUGH
+
+
 def last_full(positions: np.ndarray, flags: np.ndarray | None) -> tuple:
-    """(index, direction, bend) of a seam's last point fitted with both faces seen (`flags`: its
-    points' PointFlag bits, None: all were) and the curve of the seam up to it (end_curve); ()
-    when there is none (a T-joint seen from above all along: its one-face corners are the seam)."""
-    full = np.arange(len(positions)) if flags is None else np.flatnonzero((np.asarray(flags) & PointFlag.ONE_FACE) == 0)
+    """(index, direction, bend) of a seam's last point fitted with both faces seen and its outline
+    near the points (no NOT_FULL bit; `flags`: its points' PointFlag bits, None: all were so) and
+    the curve of the seam up to it (end_curve); () when there is none (a T-joint seen from above
+    all along: its one-face corners are the seam)."""
+    full = np.arange(len(positions)) if flags is None else np.flatnonzero((np.asarray(flags) & NOT_FULL) == 0)
     if len(full) == 0 or full[-1] < 1:
         return ()
     return (int(full[-1]), *end_curve(positions[: full[-1] + 1]))

@@ -33,7 +33,7 @@ from weldseam.geometry import arc_lengths, bend_corner, even_indices, polyline_l
 from weldseam.pipeline.bridge import GrooveTemplate, groove_template, part_ends_ahead
 from weldseam.pipeline.carried import CornerTemplate, corner_template
 from weldseam.pipeline.ends import (
-    CORNER_PAST_M, END_BASELINE_M, TANGENT_BASELINE_M, SeamLine, ahead, end_curve, last_full, on_curve,
+    CORNER_PAST_M, END_BASELINE_M, NOT_FULL, TANGENT_BASELINE_M, SeamLine, ahead, end_curve, last_full, on_curve,
     seam_line,
 )
 from weldseam.pipeline.joints import ON_SURFACE, JointKind
@@ -191,9 +191,9 @@ class SeamEnd:
 
     def admits(self, fit: SectionFit) -> bool:
         """Whether `fit` may carry the seam on: a fit of both faces anywhere; a corner with one face
-        unseen near the curve of the last fit with both faces seen (on_curve), or anywhere on a
-        seam without one, unless its unseen face was placed from an outline (PointFlag.OUTLINE):
-        that one needs the curve."""
+        unseen near the curve of the last full fit (on_curve), or anywhere on a seam without one,
+        unless its unseen face was placed from an outline (PointFlag.OUTLINE): that one needs the
+        curve."""
         if not fit.flags & PointFlag.ONE_FACE:
             return True
         if not self.last_full:
@@ -278,7 +278,7 @@ class SeamEnd:
         if len(fitted) >= 3:
             self.direction, self.bend = end_curve(fitted)
         last = step.fits[-1]
-        if not (last.bridged or last.flags & PointFlag.ONE_FACE):
+        if not (last.bridged or last.flags & NOT_FULL):
             self.last_full = (len(self.positions) - 1, self.direction, self.bend)
 
 

@@ -16,7 +16,9 @@ from scipy.spatial import cKDTree
 
 from weldseam.config import JoinConfig
 from weldseam.geometry import bend_corner, corner_before, polyline_length, unit
-from weldseam.pipeline.ends import END_BASELINE_M, ahead, end_curve, end_direction, last_full, offsets, on_curve
+from weldseam.pipeline.ends import (
+    END_BASELINE_M, NOT_FULL, ahead, end_curve, end_direction, last_full, offsets, on_curve,
+)
 from weldseam.pipeline.joints import one_joint
 from weldseam.pipeline.section import PointFlag
 from weldseam.pipeline.trace import TracedSeam, end_to_end
@@ -167,7 +169,7 @@ def _joined(
                 reference = unit(out_a - out_b)
             along = distance < 1e-3 or unit(gap) @ reference >= cos_along
             if not (facing and along) or _junction((a[-1] + b[0]) / 2, others, join_m) \
-                    or not _one_face_follows(first_way, second_way):
+                    or not _inferred_follows(first_way, second_way):
                 continue
             corner = _corner(a, out_a, b, out_b, join_m)
             if corner is None and not _continues(first_way, second_way):
@@ -202,15 +204,17 @@ def _continues(a: TracedSeam, b: TracedSeam) -> bool:
     return True
 
 
-def _one_face_follows(a: TracedSeam, b: TracedSeam) -> bool:
-    """Whether b may go on from a's end as far as corners with one face unseen go: a piece all
-    of whose points rest on such corners goes on from a piece with fits of both faces only along
-    the curve at its last such fit (ends.on_curve), as an extension's corners do. Past a standing
-    pipe's silhouette the edge of its shadow passes for such a corner, and runs straight off the
-    ring along the line of sight."""
+def _inferred_follows(a: TracedSeam, b: TracedSeam) -> bool:
+    """Whether b may go on from a's end as far as inferred fits go: a piece none of whose points
+    rests on a full fit (ends.NOT_FULL: corners with one face unseen, outlines that miss the
+    points) goes on from a piece with full fits only along the curve at its last such fit
+    (ends.on_curve), as an extension's inferred fits do. Past a standing pipe's silhouette the edge
+    of its shadow passes for a corner with one face unseen, and runs straight off the ring along
+    the line of sight; past a plate's end a loose bar lying against it gives rough grooves in line
+    with the seam, then off it."""
     for measured, inferred in ((a, b), (b.reversed(), a.reversed())):
         full = last_full(measured.positions_m, measured.point_flags)
-        if not full or np.any((inferred.point_flags & PointFlag.ONE_FACE) == 0):
+        if not full or np.any((inferred.point_flags & NOT_FULL) == 0):
             continue
         index, direction, bend = full
         start = polyline_length(measured.positions_m[index:])
