@@ -20,7 +20,6 @@ from weldseam.pipeline.ends import (
     END_BASELINE_M, NOT_FULL, ahead, end_curve, end_direction, last_full, offsets, on_curve,
 )
 from weldseam.pipeline.joints import one_joint
-from weldseam.pipeline.section import PointFlag
 from weldseam.pipeline.trace import TracedSeam, end_to_end
 
 # How far sideways of the curve one piece's end leads along that another piece of the same seam may

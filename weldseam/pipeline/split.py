@@ -48,8 +48,8 @@ def split_seams(seams: list[TracedSeam], holes: list[Hole], params: SplitConfig,
     """The seams without fragments, split at junctions, each seen over min_seam_length_m (what was
     interpolated across holes does not count), no shorter than its kind's shortest seam
     (joints.min_length_m), clean somewhere or no shorter than min_inferred_length_m and explained
-    (see the module's docstring), and with the holes whose middle lies within `step_m` (the spacing of the
-    points bridged across them) of one of its points."""
+    (see the module's docstring), and with the holes whose middle lies within `step_m` (the spacing
+    of the points bridged across them) of one of its points."""
     seams = [seam for seam in seams
              if seam.length_m >= max(params.min_branch_m, params.min_seam_length_m) and long_enough(seam)]
     seams = split_at_junctions(seams, tolerance_m=params.junction_m)
