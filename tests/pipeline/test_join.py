@@ -22,7 +22,7 @@ def line(start, end, step=0.002):
 
 
 def join(seams):
-    return join_pieces(seams, join_m=0.025, max_turn_deg=100.0)
+    return join_pieces(seams, join_m=0.025, max_turn_deg=100.0, step_m=0.002)
 
 
 def test_collinear_pieces_across_a_hole_join_into_one_seam_in_order():

@@ -78,6 +78,14 @@ def ahead(last_point, direction, bend, distance_m: float) -> tuple[np.ndarray, n
     return last_point + distance_m * direction + 0.5 * distance_m**2 * bend, unit(direction + distance_m * bend)
 
 
+def sideways_reach_m(step_m: float, distance_m: float) -> float:
+    """How far (m) sideways of the curve predicted `distance_m` ahead (ahead) a fit may lie and
+    still be the seam, for an extension stepping `step_m`: max(1.5 steps, 15 % of the distance).
+    Near an end the prediction drifts by 1-3 mm; the bound follows curves of radius down to
+    ~40 mm across the longest skip."""
+    return max(1.5 * step_m, 0.15 * distance_m)
+
+
 def offsets(point, predicted, travel, axis) -> tuple[float, float]:
     """(depth, sideways): the offsets (m) of `point` from `predicted` along the torch `axis`
     (made perpendicular to `travel`) and across it."""

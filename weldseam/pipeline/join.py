@@ -17,24 +17,21 @@ from scipy.spatial import cKDTree
 from weldseam.config import JoinConfig
 from weldseam.geometry import bend_corner, corner_before, polyline_length, unit
 from weldseam.pipeline.ends import (
-    END_BASELINE_M, NOT_FULL, ahead, end_curve, end_direction, last_full, offsets, on_curve,
+    END_BASELINE_M, NOT_FULL, ahead, end_curve, end_direction, last_full, offsets, on_curve, sideways_reach_m,
 )
 from weldseam.pipeline.joints import one_joint
 from weldseam.pipeline.trace import TracedSeam, end_to_end
 
-# How far sideways of the curve one piece's end leads along that another piece of the same seam may
-# start (extend.max_skip_m's gap: an extension takes a fit 1.5 steps of 2 mm, or 15 % of the
-# distance, off its prediction).
-CONTINUE_FLOOR_M = 0.003
-CONTINUE_SHARE = 0.15
+# Another piece of the same seam may start this many times as far sideways of the curve one piece's
+# end leads along as an extension would take a fit there (ends.sideways_reach_m).
 CONTINUE_SLACK = 2.0
 
 
-def join_seams(seams: list[TracedSeam], params: JoinConfig) -> list[TracedSeam]:
+def join_seams(seams: list[TracedSeam], params: JoinConfig, step_m: float) -> list[TracedSeam]:
     """The seams trimmed where they overlap, joined, and trimmed again (a join may bridge onto a
     stretch another piece also covers)."""
     joined = join_pieces(trim_overlaps(seams, tolerance_m=params.overlap_m), join_m=params.join_m,
-                         max_turn_deg=params.max_turn_deg)  # fmt: skip
+                         max_turn_deg=params.max_turn_deg, step_m=step_m)  # fmt: skip
     return trim_overlaps(joined, tolerance_m=params.overlap_m)
 
 
@@ -109,14 +106,17 @@ def _densified(points: np.ndarray, closed: bool, step_m: float) -> np.ndarray:
     return np.vstack([*dense, points[-1:]]) if dense else points
 
 
-def join_pieces(seams: list[TracedSeam], *, join_m: float, max_turn_deg: float) -> list[TracedSeam]:
+def join_pieces(
+    seams: list[TracedSeam], *, join_m: float, max_turn_deg: float, step_m: float
+) -> list[TracedSeam]:
     """Join pieces of one seam and close loops.
 
     Two open pieces of one joint (joints.one_joint: the same kind, or one a special case of the
     other; the joined seam takes the kind of the piece with more points) are joined when an end
     of one and an end of the other are within `join_m`, face each other (their outward directions differ from opposite by
     less than `max_turn_deg`, so a groove turning over a block edge stays one seam) and the
-    gap runs along their mean direction (within 60 degrees). Where a third seam also ends (the
+    gap runs along their mean direction (within 60 degrees); pieces joined straight must continue
+    each other (_continues: `step_m` is the extension's step). Where a third seam also ends (the
     junction of a Y or T) nothing is joined: the branches stay separate seams. An open seam whose own ends meet that way is a closed loop.
     """
     pieces = sorted(seams, key=lambda s: (-len(s.positions_m), tuple(s.positions_m[0])))
@@ -132,7 +132,7 @@ def join_pieces(seams: list[TracedSeam], *, join_m: float, max_turn_deg: float) 
                 if first.closed or second.closed or not one_joint(first.joint, second.joint):
                     continue
                 others = [piece for k, piece in enumerate(pieces) if k not in (i, j)]
-                candidate = _joined(first, second, join_m, cos_turn, cos_along, others)
+                candidate = _joined(first, second, join_m, cos_turn, cos_along, others, step_m)
                 if candidate is not None and (best is None or candidate[0] < best[0]):
                     best = (candidate[0], i, j, candidate[1])
         if best is None:
@@ -144,7 +144,8 @@ def join_pieces(seams: list[TracedSeam], *, join_m: float, max_turn_deg: float) 
 
 
 def _joined(
-    first: TracedSeam, second: TracedSeam, join_m: float, cos_turn: float, cos_along: float, others: list[TracedSeam]
+    first: TracedSeam, second: TracedSeam, join_m: float, cos_turn: float, cos_along: float,
+    others: list[TracedSeam], step_m: float,
 ) -> tuple[float, TracedSeam] | None:
     """(gap, joined seam) for the closest way to join two pieces end to end, or None."""
     best = None
@@ -171,7 +172,7 @@ def _joined(
                     or not _inferred_follows(first_way, second_way):
                 continue
             corner = _corner(a, out_a, b, out_b, join_m)
-            if corner is None and not _continues(first_way, second_way):
+            if corner is None and not _continues(first_way, second_way, step_m):
                 continue
             between = (np.empty((0, 3)), np.empty((0, 3)), np.empty(0, np.uint8)) if corner is None else \
                 (corner[None], unit(first_way.torch_axes[-1] + second_way.torch_axes[0])[None], np.zeros(1, np.uint8))
@@ -179,13 +180,13 @@ def _joined(
     return best
 
 
-def _continues(a: TracedSeam, b: TracedSeam) -> bool:
+def _continues(a: TracedSeam, b: TracedSeam, step_m: float) -> bool:
     """Whether two pieces joined straight continue each other: b's start lies where a's end curve
     leads (ends.ahead over the gap between them), and a's end where b's start curve leads back,
-    each within CONTINUE_SLACK x max(CONTINUE_FLOOR_M, CONTINUE_SHARE x the gap) sideways of the
-    torch axis (widened by the pieces' across_spread): twice what an extension takes across its
-    longest skip, as a piece's end curve, its bend read over its last few points, may miss by
-    that much across a wider gap. A piece too short for a direction defers to the other. Beside a
+    each within CONTINUE_SLACK x what an extension stepping `step_m` takes across the gap
+    (ends.sideways_reach_m) sideways of the torch axis, widened by the pieces' across_spread: a
+    piece's end curve, its bend read over its last few points, may miss by that much across a
+    wider gap. A piece too short for a direction defers to the other. Beside a
     tack weld, a chain on its edge fits a groove 3-4 mm off the seam over 20 mm, its line turned
     25 degrees from the seam's, and its curve misses the seam's end by 10 mm: no piece of it."""
     for before, after in ((a, b), (b.reversed(), a.reversed())):
@@ -197,7 +198,7 @@ def _continues(a: TracedSeam, b: TracedSeam) -> bool:
         distance = float(np.linalg.norm(target - last))
         predicted, travel = ahead(last, direction, bend, distance)
         _, sideways = offsets(target, predicted, travel, before.torch_axes[-1])
-        bound = max(CONTINUE_FLOOR_M, CONTINUE_SHARE * distance) * max(a.across_spread, b.across_spread)
+        bound = sideways_reach_m(step_m, distance) * max(a.across_spread, b.across_spread)
         if sideways > CONTINUE_SLACK * bound:
             return False
     return True

@@ -287,7 +287,7 @@ def _trace(state: PlanState, c: PlanConfig) -> None:
 
 
 def _join(state: PlanState, c: PlanConfig) -> None:
-    state.seams = join.join_seams(state.seams, c.join)
+    state.seams = join.join_seams(state.seams, c.join, c.extend.step_m)
     dump_seams(state, "join")
 
 

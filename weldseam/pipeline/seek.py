@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from weldseam.config import ExtendConfig
 from weldseam.pipeline.bridge import GrooveTemplate, fit_or_bridge
 from weldseam.pipeline.carried import CornerTemplate, carried_fit
-from weldseam.pipeline.ends import SeamLine, ahead, offsets
+from weldseam.pipeline.ends import SeamLine, ahead, offsets, sideways_reach_m
 from weldseam.pipeline.joints import JointKind
 from weldseam.pipeline.section import FineSurface, SectionFit
 
@@ -53,7 +53,7 @@ def next_fit(extension: Extension, last_point, last_axis, heading,
         predicted, travel = ahead(last_point, direction, bend, distance)
         fit, depth, sideways = section_at(extension, predicted, travel, last_axis, template)
         spread = fit.geometry.across_spread
-        near = (sideways <= max(1.5 * step, 0.15 * distance) * spread
+        near = (sideways <= sideways_reach_m(step, distance) * spread
                 and depth <= max(0.5 * step, 0.2 * distance) * spread)
         on_line = line is not None and line.holds(fit.point_m, last_axis, step * spread)
         if fit.kind == extension.joint and (near or on_line):
