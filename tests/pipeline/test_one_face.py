@@ -94,3 +94,45 @@ def test_a_dropout_in_the_wall_top_beside_the_section_does_not_make_it_an_outlin
     top = wall_top()
     only_here = lambda u_, w_, along=0.0: top(u_, w_, along) if along == 0 else None  # noqa: E731
     assert not one_face_corner(u, w, UP, only_here, PARAMS, 0.025).geometry.outline_wall
+
+
+def flange_both_sides(rng, foot=(0.004, 0.016)):
+    """A flange (w = 0) across the whole window but for the stretch `foot` (u from, to) a wall
+    stands on and shadows: a T-joint's flange either side of its web, seen from above."""
+    u, w = flange(rng, end_u=0.025)
+    keep = (u <= foot[0]) | (u >= foot[1])
+    return u[keep], w[keep]
+
+
+def web_top(over=(0.004, 0.010), height=0.05, ends_here=False):
+    """sight(): lines of sight from the flange's gap (u 0.004-0.016) meet the web's top, standing
+    over `over` (u from, to) `height` up; the top runs along the seam, or (ends_here) the web ends
+    at this section and only looking back along the seam meets it."""
+    def sight(u, w, along=0.0):
+        if not 0.004 < u < 0.016 or (ends_here and along > 0):
+            return None
+        return (min(max(u, over[0]), over[1]), height, along - (0.002 if ends_here else 0.0))
+    return sight
+
+
+def test_a_flange_going_on_beyond_the_web_ends_at_the_web_and_is_a_corner(rng):
+    """The web's foot and shadow leave a gap in the flange, which goes on beyond it along the same
+    line: with the web's top standing over the gap, the near flange's end is the corner."""
+    u, w = flange_both_sides(rng)
+    fit = one_face_corner(u, w, UP, web_top(), PARAMS, 0.025)
+    assert fit is not None and fit.geometry.faces_seen == 1
+    assert abs(fit.u - 0.004) < 0.0004 and abs(fit.w) < 0.0004
+
+
+def test_a_gap_in_the_flange_past_a_webs_end_is_its_shadow_and_no_corner(rng):
+    """Past the web's end the sights over the gap meet the web's end, behind: nothing stands over
+    the gap along the seam, the flange goes on across it, and no face ends there."""
+    u, w = flange_both_sides(rng)
+    assert one_face_corner(u, w, UP, web_top(ends_here=True), PARAMS, 0.025) is None
+
+
+def test_a_top_seen_beside_the_gap_is_no_wall_standing_in_it(rng):
+    """A surface the lines of sight over the gap meet beyond its sides (another part, far off
+    across the section) stands on no part of the flange's gap: the gap is a hole."""
+    u, w = flange_both_sides(rng)
+    assert one_face_corner(u, w, UP, web_top(over=(0.022, 0.024)), PARAMS, 0.025) is None

@@ -6,7 +6,9 @@ and nothing of the web's face. In a section the flange is one face that ends at 
 no surface beyond it in the window, which a plate's outer edge shows too. What tells them apart
 is what the camera sees past E: looking at where the flange would go on, the line of sight meets
 the web's top edge, nearer the camera and at least a face's length above the flange; past a
-plate's edge it meets the table below, or nothing.
+plate's edge it meets the table below, or nothing. Where the flange goes on beyond the web (a
+T's flange either side of it), the web's foot and its shadow leave a gap in the flange: a gap with
+a wall's top standing over it is where the flange ends, one with nothing over it a dropout.
 
 The corner is E (the camera sees the flange up to the web's foot: the web's face is the one it
 cannot see), the unseen face runs from E to the nearest surface on that line of sight (the web's
@@ -37,6 +39,8 @@ from weldseam.pipeline.joints.robust import fraction, line, middle, noise
 GAP_M = 0.003
 FACE_INLIERS = 0.8
 FACE_TOLERANCE_M = 0.0005
+# Where the camera sees over a gap in a face is looked at these fractions of the way across it.
+GAP_SAMPLES = np.array([0.1, 0.3, 0.5, 0.7, 0.9])
 # The line of sight is taken these distances past the face's end, nearest first: just past the
 # foot of a wall seen edge-on it may leave through the unseen face itself, further in through the
 # wall's top.
@@ -69,7 +73,7 @@ def one_face_corner(u, w, toward, sight, params: JointsConfig, half_width_m: flo
     `along` the travel (m) that is at least a fillet leg nearer to the camera, or None."""
     if len(u) < 12:
         return None
-    faces = _faces(u, w, np.split(np.arange(len(u)), np.flatnonzero(np.diff(u) > GAP_M) + 1))
+    faces = _faces(u, w, np.split(np.arange(len(u)), np.flatnonzero(np.diff(u) > GAP_M) + 1), sight)
     found = []
     for k, face in enumerate(faces):
         for side in (1, -1):  # the face's right end, its left end
@@ -81,17 +85,40 @@ def one_face_corner(u, w, toward, sight, params: JointsConfig, half_width_m: flo
     return min(found, key=lambda fit: abs(fit.u)) if found else None
 
 
-def _faces(u, w, runs: list[np.ndarray]) -> list[np.ndarray]:
+def _faces(u, w, runs: list[np.ndarray], sight) -> list[np.ndarray]:
     """The runs of points between gaps joined where a run goes on along the line of the ones
-    before it (within 2 FACE_TOLERANCE_M, median): a hole in a face, not its end."""
+    before it (within 2 FACE_TOLERANCE_M, median) and no wall stands over the gap (_wall_over at
+    GAP_SAMPLES across it, on that line): a hole in a face, not its end. A wall standing on the
+    face hides a stretch of it the width of its foot and more, and the face goes on along the
+    same line beyond it (a T-joint's flange either side of its web, seen from above)."""
     faces = [runs[0]]
     for run in runs[1:]:
         intercept, slope = line(u[faces[-1]], w[faces[-1]])
-        if middle(np.abs(w[run] - (intercept + slope * u[run]))) <= 2 * FACE_TOLERANCE_M:
+        gap = (u[faces[-1][-1]], u[run[0]])
+        across = gap[0] + GAP_SAMPLES * (gap[1] - gap[0])
+        if (middle(np.abs(w[run] - (intercept + slope * u[run]))) <= 2 * FACE_TOLERANCE_M
+                and not any(_wall_over((at, intercept + slope * at), gap, sight) for at in across)):
             faces[-1] = np.concatenate([faces[-1], run])
         else:
             faces.append(run)
     return faces
+
+
+def _wall_over(looked_at, gap: tuple[float, float], sight) -> bool:
+    """Whether the camera sees, over the profile point `looked_at` (u, w) in a gap of a face
+    (`gap`: the u of its two sides), the top of a wall standing in the gap and running along the
+    seam both ways: the line of sight meets a top whose u lies within the gap, and looked at
+    WALL_STEP_M further along the travel and back, meets it at least half as far along each way.
+    A wall's foot lies in the gap it leaves in the face, and its top above it; past the end of a
+    wall the face lies in its shadow, and the sights over it meet the wall's end, behind."""
+    top = sight(*looked_at)
+    if top is None or not gap[0] <= top[0] <= gap[1]:
+        return False
+    for step in (WALL_STEP_M, -WALL_STEP_M):
+        found = sight(*looked_at, step)
+        if found is None or (found[2] - top[2]) * np.sign(step) < WALL_STEP_M / 2:
+            return False
+    return True
 
 
 def _runs_along(looked_at, top, sight) -> bool:
