@@ -159,7 +159,7 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
         state.gaps = [middles[members] for members in found]
     state.short_candidates = [replace(candidates.cluster_candidate(state.working[members]), rejection=Rejection.TOO_SHORT)
                               for members in short]  # fmt: skip
-    state.working_tree = cKDTree(state.working)
+    state.working_tree = cKDTree(state.working, balanced_tree=False, compact_nodes=False)
     if c.support.enabled:
         state.support = support.find_support_plane(state.working, state.descriptor <= state.threshold,
                                                    state.working_camera, tolerance_m=c.support.tolerance_m,
