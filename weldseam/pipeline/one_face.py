@@ -115,11 +115,7 @@ def _wall_over(looked_at, gap: tuple[float, float], sight) -> bool:
     top = sight(*looked_at)
     if top is None or not gap[0] <= top[0] <= gap[1]:
         return False
-    for step in (WALL_STEP_M, -WALL_STEP_M):
-        found = sight(*looked_at, step)
-        if found is None or (found[2] - top[2]) * np.sign(step) < WALL_STEP_M / 2:
-            return False
-    return True
+    return all(met is True for met in _met_along(looked_at, top, sight))
 
 
 def _runs_along(looked_at, top, sight) -> bool:
@@ -127,8 +123,17 @@ def _runs_along(looked_at, top, sight) -> bool:
     seam: looked at WALL_STEP_M further along the travel (or back), the line of sight meets it at
     least half as far along, or meets nothing (a dropout in the top). Not so when what it meets
     stays put: the silhouette of a post or pipe whose shadow the flange ends in."""
-    met = [(step, found) for step in (WALL_STEP_M, -WALL_STEP_M) if (found := sight(*looked_at, step)) is not None]
-    return not met or any((found[2] - top[2]) * np.sign(step) >= WALL_STEP_M / 2 for step, found in met)
+    met = [found for found in _met_along(looked_at, top, sight) if found is not None]
+    return not met or any(met)
+
+
+def _met_along(looked_at, top, sight):
+    """For the line of sight through `looked_at` (u, w) moved WALL_STEP_M further along the travel,
+    then back: None where it meets nothing, else whether it meets a top at least half a step
+    farther that way than `top` (u, w, along) lies: a wall's top running along the seam."""
+    for step in (WALL_STEP_M, -WALL_STEP_M):
+        found = sight(*looked_at, step)
+        yield None if found is None else bool((found[2] - top[2]) * np.sign(step) >= WALL_STEP_M / 2)
 
 
 def _corner(u, w, side, view, sight, params: JointsConfig):
