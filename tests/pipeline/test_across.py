@@ -85,6 +85,18 @@ def test_a_seam_hidden_under_a_bar_is_not_bridged_but_a_hole_seen_so_is(rng):
     assert len(join_across_holes(pieces, under_a_bar, CAMERA, PARAMS, JOIN_M)) == 2
 
 
+def test_a_hole_whose_edge_lies_past_a_pieces_end_is_bridged_within_an_extensions_skip(rng):
+    """The hole's edge is ragged: the groove is seen 10 mm past the first piece's end (y 66-76 mm),
+    where its sections failed, cut by the hole. That edge is less than the run of failed sections
+    an extension steps over (max_skip_m): the pieces are joined across. Seen 24 mm past the end,
+    the groove there was no hole's edge but a stretch the trace could not fit: they stay apart."""
+    pieces = [piece(0.01, 0.068), piece(0.132, 0.19)]
+    ragged = groove_surface(rng, hole_from_m=0.076)
+    assert len(join_across_holes(pieces, ragged, CAMERA, PARAMS, JOIN_M)) == 1
+    seen_on = groove_surface(rng, hole_from_m=0.09)
+    assert len(join_across_holes(pieces, seen_on, CAMERA, PARAMS, JOIN_M)) == 2
+
+
 def test_pieces_not_in_line_stay_apart(rng):
     pieces = [piece(0.01, 0.068), piece(0.132, 0.19, x_m=0.02)]
     assert len(join_across_holes(pieces, groove_surface(rng, hole_half_width_m=0.05), CAMERA, PARAMS, JOIN_M)) == 2

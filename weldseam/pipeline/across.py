@@ -7,7 +7,8 @@ was traced on both sides, the two pieces bound the stretch between from both end
 carries the seam max_hole_m toward the other, so pieces up to twice that apart are joined when
 they lie in line (each one's line passes the other's facing end within a quarter of the gap
 sideways, as an extension's fit beyond a hole must) and the gap is a hole: the camera saw
-nothing along its line of sight through the curve between them, neither on it nor beyond it.
+nothing along its line of sight through the curve between them, neither on it nor beyond it,
+between the hole's ragged edges (the failed sections an extension steps over anyway).
 Past a part's end it sees what lies beyond (the table, the gap between two parts), and over a
 groove it sees the groove's bottom: those are no hole. The stretch between is interpolated
 (PointFlag.INTERPOLATED) and recorded as a hole.
@@ -18,9 +19,9 @@ from __future__ import annotations
 import numpy as np
 
 from weldseam.config import ExtendConfig
-from weldseam.geometry import unit
+from weldseam.geometry import arc_lengths, unit
 from weldseam.pipeline.ends import TANGENT_BASELINE_M, seam_line
-from weldseam.pipeline.holes import HOLE_EDGE_M, HOLE_RADIUS_M, HOLE_STRAYS, hermite, hidden, hole_of
+from weldseam.pipeline.holes import HOLE_RADIUS_M, empty_between_edges, hermite, hidden, hole_of
 from weldseam.pipeline.joints import one_joint
 from weldseam.pipeline.section import FineSurface, PointFlag, SectionFit
 from weldseam.pipeline.trace import TracedSeam, end_to_end
@@ -69,7 +70,7 @@ def _across(first: TracedSeam, second: TracedSeam, surface, camera_m, params: Ex
             gap = float(np.linalg.norm(b.positions_m[0] - a.positions_m[-1]))
             if not join_m < gap <= ENDS * params.max_hole_m or gap >= best[0]:
                 continue
-            bridge = _bridge(a, b, surface, camera_m, params.step_m)
+            bridge = _bridge(a, b, surface, camera_m, params.step_m, params.max_skip_m)
             if bridge is not None:
                 hole = hole_of(a.positions_m[-1], [*bridge, SectionFit(b.joint, b.positions_m[0], b.torch_axes[0])])
                 between = ([f.point_m for f in bridge], [f.torch_axis for f in bridge], [f.flags for f in bridge])
@@ -77,11 +78,14 @@ def _across(first: TracedSeam, second: TracedSeam, surface, camera_m, params: Ex
     return best
 
 
-def _bridge(a: TracedSeam, b: TracedSeam, surface, camera_m, step_m: float) -> list[SectionFit] | None:
+def _bridge(
+    a: TracedSeam, b: TracedSeam, surface, camera_m, step_m: float, max_edge_m: float
+) -> list[SectionFit] | None:
     """The interpolated points from a's end to b's start on the cubic Hermite curve along their
     lines (ends.seam_line), or None unless each piece's line passes the other's facing end within
-    SIDEWAYS_SHARE of the gap, the camera saw no surface through the curve (seen_through)
-    farther than HOLE_EDGE_M from its ends (at a hole's edge it sees the groove beside it), and
+    SIDEWAYS_SHARE of the gap, the camera saw no surface through the curve (seen_through) between
+    the hole's edges, each at most `max_edge_m` long (holes.empty_between_edges: at a hole's ragged
+    edge it sees the groove or the part's surfaces beside the seam, where the sections failed), and
     nothing in front of it hides the curve (holes.hidden)."""
     leaving = seam_line(a.positions_m)
     arriving = seam_line(b.positions_m[::-1])
@@ -97,9 +101,8 @@ def _bridge(a: TracedSeam, b: TracedSeam, surface, camera_m, step_m: float) -> l
     if gap @ leaving.direction <= 0 or gap @ arriving.direction >= 0:
         return None  # the pieces do not face each other
     curve = hermite(start, leaving.direction, end, -arriving.direction, min(step_m, HOLE_RADIUS_M))
-    from_ends = np.minimum(np.linalg.norm(curve - start, axis=1), np.linalg.norm(curve - end, axis=1))
-    inside = from_ends >= HOLE_EDGE_M
-    if seen_through(curve[inside], surface, camera_m) > HOLE_STRAYS or hidden(curve, surface):
+    arc = arc_lengths(np.vstack([start, curve, end]))[1:]  # from `start`, on to `end`
+    if not empty_between_edges(seen_through(curve, surface, camera_m), arc, max_edge_m) or hidden(curve, surface):
         return None
     points = hermite(start, leaving.direction, end, -arriving.direction, step_m)
     weights = np.linspace(0.0, 1.0, len(points) + 2)[1:-1, None]
@@ -108,11 +111,12 @@ def _bridge(a: TracedSeam, b: TracedSeam, surface, camera_m, step_m: float) -> l
             for p, axis in zip(points, axes)]  # fmt: skip
 
 
-def seen_through(curve: np.ndarray, surface: FineSurface, camera_m: np.ndarray) -> int:
-    """How many scan points lie within HOLE_RADIUS_M of the camera's lines of sight through the
-    `curve`'s points (K, 3), from SIGHT_BEFORE_M before each point to SIGHT_REACH_M past it,
+def seen_through(curve: np.ndarray, surface: FineSurface, camera_m: np.ndarray) -> np.ndarray:
+    """(K,) how many scan points lie within HOLE_RADIUS_M of the camera's line of sight through
+    each of the `curve`'s points (K, 3), from SIGHT_BEFORE_M before it to SIGHT_REACH_M past it,
     sampled every HOLE_RADIUS_M (a point near two samples counts twice)."""
     sight = unit(curve - camera_m)
     steps = np.arange(-SIGHT_BEFORE_M, SIGHT_REACH_M, HOLE_RADIUS_M)
     samples = (curve[:, None, :] + steps[None, :, None] * sight[:, None, :]).reshape(-1, 3)
-    return int(surface.tree.query_ball_point(samples, HOLE_RADIUS_M, return_length=True).sum())
+    counts = surface.tree.query_ball_point(samples, HOLE_RADIUS_M, return_length=True)
+    return counts.reshape(len(curve), len(steps)).sum(axis=1)

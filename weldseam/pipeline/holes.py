@@ -193,16 +193,24 @@ def _empty(line: np.ndarray, joint: JointKind, surface: FineSurface, max_edge_m:
     near = surface.tree.query_ball_point(line, HOLE_RADIUS_M, return_length=True)
     if joint not in ON_SURFACE:
         return int(near.sum()) <= HOLE_STRAYS
-    free = np.flatnonzero(near == 0)
-    if len(free) == 0:
-        return False
-    arc = arc_lengths(line)
-    first, last = free[0], free[-1]
-    if arc[last] - arc[first] < HOLE_EDGE_M or int(near[first : last + 1].sum()) > HOLE_STRAYS:
-        return False
-    if max(arc[first], arc[-1] - arc[last]) > max_edge_m:
+    if not empty_between_edges(near, arc_lengths(line), max_edge_m):
         return False
     return surface.view is None or int(np.count_nonzero(surface.view.seen_past(line, CORNER_PAST_M))) <= HOLE_STRAYS
+
+
+def empty_between_edges(counts: np.ndarray, arc: np.ndarray, max_edge_m: float) -> bool:
+    """Whether a line's points, `counts` (K,) scan points seen at each and `arc` (K,) their arc
+    along it from its start (m; the line runs on to arc[-1]), cross a hole: the stretch from the
+    first point with none seen to the last is at least HOLE_EDGE_M long and holds no more than
+    HOLE_STRAYS, and the hole's edges before and after it (ragged: the part's surfaces go on into
+    it, where the sections, cut by the hole, fail) are each at most `max_edge_m` long."""
+    free = np.flatnonzero(counts == 0)
+    if len(free) == 0:
+        return False
+    first, last = free[0], free[-1]
+    if arc[last] - arc[first] < HOLE_EDGE_M or int(counts[first : last + 1].sum()) > HOLE_STRAYS:
+        return False
+    return max(arc[first], arc[-1] - arc[last]) <= max_edge_m
 
 
 def _part_ends_after(extension: Extension, fit, travel, last_point, last_axis, direction) -> bool:
