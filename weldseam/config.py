@@ -158,7 +158,7 @@ class TraceConfig:
 
 @dataclass(frozen=True)
 class SupportConfig:
-    enabled: bool = _param(True, "a fillet on the support plane (the table) is where a part rests, not a joint")
+    enabled: bool = _param(True, "a seam on the support plane (the table) or beside it is no joint (a part rests there)")
     tolerance_m: float = _param(0.002, "how far a point may lie from the support plane and be on it")
     below_fraction: float = _param(0.05, "share of points allowed beyond the support plane (noise, outliers)")
 

@@ -31,11 +31,14 @@ def test_a_plane_with_much_beyond_it_is_not_a_support():
 
 
 @pytest.mark.parametrize("joint, height_m, dropped", [
-    (JointKind.FILLET, 0.0005, True), (JointKind.FILLET, 0.01, False), (JointKind.V_GROOVE, 0.0005, False),
+    (JointKind.FILLET, 0.0005, True), (JointKind.FILLET, 0.01, False),
     (JointKind.LAP, 0.0005, True),  # a plate lying on the table: the same step as a lap
     (JointKind.LAP, 0.008, False),  # a lap on a bottom plate 8 mm thick
+    # A groove's point lies at its plates' surface: at the table's, the opening is in the table
+    # (a slot, a line of missing pixels); in 3 mm plates lying on the table it is 3 mm above it.
+    (JointKind.SQUARE_BUTT, 0.0005, True), (JointKind.V_GROOVE, 0.0005, True), (JointKind.V_GROOVE, 0.003, False),
 ])
-def test_only_a_corner_on_the_support_plane_is_dropped(joint, height_m, dropped):
+def test_a_seam_on_the_support_plane_is_dropped(joint, height_m, dropped):
     line = np.column_stack([np.linspace(0, 0.1, 20), np.zeros(20), np.full(20, height_m)])
     seam = TracedSeam(line, np.tile([0.0, 0.0, -1.0], (20, 1)), False, joint, 1.0)
     support = (np.zeros(3), np.array([0.0, 0.0, 1.0]))
@@ -73,7 +76,8 @@ def test_the_v_a_tilted_plate_forms_with_the_table_is_dropped():
 
 def test_a_groove_between_plates_lying_on_the_table_is_kept():
     # Two 10 mm plates on the table with a 60 degree V between them (root 2 mm above the
-    # table): the table shows beyond the plates, but neither side of the groove is the table.
+    # table), its seam point at the plates' surface: the table shows beyond the plates, but
+    # neither side of the groove is the table.
     x, y = grid((0.0, 0.1), (-0.05, 0.05))
     top = np.abs(y) >= 0.0046 + 0.001
     plates = np.column_stack([x[top], y[top], np.full(top.sum(), 0.01)])
@@ -81,6 +85,6 @@ def test_a_groove_between_plates_lying_on_the_table_is_kept():
     walls = np.column_stack([x[wall], y[wall], 0.002 + np.abs(y[wall]) / np.tan(np.radians(30))])
     xt, yt = grid((0.0, 0.1), (-0.1, -0.05))
     table = np.column_stack([xt, yt, np.zeros(xt.size)])
-    seam = seam_along_x(0.002, np.array([0.0, 0.0, -1.0]))
+    seam = seam_along_x(0.01, np.array([0.0, 0.0, -1.0]))
     surface = surface_of(np.vstack([plates, walls, table]))
     assert len(off_support([seam], surface, TABLE, tolerance_m=0.002)) == 1

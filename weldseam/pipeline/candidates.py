@@ -19,7 +19,7 @@ class Rejection(str, Enum):
     NO_JOINT = "no joint model fits its sections"
     INSIDE_SEAM = "inside a seam traced before"
     TOO_FEW_FITS = "too few of its sections fit one joint (trace.min_valid_fraction)"
-    ON_SUPPORT = "a corner on the support plane (where a part rests on the table)"
+    ON_SUPPORT = "on the support plane, or formed with it (where a part rests on the table)"
     FRAGMENT = "too short after joining and extending"
     APART = "a corner between two parts standing apart (one face runs on behind the other: a clamp's post)"
     SLOT = "a slot between two parts (sides not in line, or a gap down to the table: a clamp or bar beside a part)"

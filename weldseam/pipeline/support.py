@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from weldseam.pipeline.joints import ON_SURFACE
 from weldseam.pipeline.trace import TracedSeam
 
 RANSAC_TRIALS = 200
@@ -64,10 +63,12 @@ def off_support(seams: list[TracedSeam], surface, support, tolerance_m: float) -
 
 
 def lies_on(seam: TracedSeam, plane, tolerance_m: float) -> bool:
-    """Whether an inside corner's or a lap's points lie on `plane` (their median distance at most
-    `tolerance_m`): where a part stands or lies on the table, even where its side is hard to see."""
+    """Whether a seam's points lie on `plane` (their median distance at most `tolerance_m`): an
+    inside corner or a lap there is where a part stands or lies on the table, even where its side
+    is hard to see; a groove's point lies at its plates' surface, and plates are thicker than the
+    tolerance: an opening in the table itself (a slot, a crack, a line of missing pixels) is none."""
     centre, normal = plane
-    return seam.joint in ON_SURFACE and np.median(np.abs((seam.positions_m - centre) @ normal)) <= tolerance_m
+    return bool(np.median(np.abs((seam.positions_m - centre) @ normal)) <= tolerance_m)
 
 
 def formed_with(seam: TracedSeam, surface, plane, tolerance_m: float) -> bool:
