@@ -88,3 +88,17 @@ def test_a_groove_between_plates_lying_on_the_table_is_kept():
     seam = seam_along_x(0.01, np.array([0.0, 0.0, -1.0]))
     surface = surface_of(np.vstack([plates, walls, table]))
     assert len(off_support([seam], surface, TABLE, tolerance_m=0.002)) == 1
+
+
+def test_a_corner_a_bar_forms_with_the_table_is_dropped_however_its_axis_leans():
+    """A bar 14 mm high standing on the table along y, its side face at x = 0: a corner fitted
+    3.5 mm up that face with the torch axis level (into the bar) has the table below it, not
+    beside it across its lateral (which points up): the table is the surface on one side of it
+    all the same, from 4 mm of it on."""
+    y, z = grid((0.0, 0.1), (0.0, 0.014))
+    face = np.column_stack([np.zeros(y.size), y, z])
+    x, y = grid((0.0005, 0.03), (0.0, 0.1))
+    table = np.column_stack([x, y, np.zeros(x.size)])
+    line = np.column_stack([np.zeros(51), np.linspace(0.0, 0.1, 51), np.full(51, 0.0035)])
+    seam = TracedSeam(line, np.tile([-1.0, 0.0, 0.0], (51, 1)), False, JointKind.LAP, 1.0)
+    assert off_support([seam], surface_of(np.vstack([face, table])), TABLE, tolerance_m=0.002) == []

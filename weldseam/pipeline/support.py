@@ -73,8 +73,11 @@ def lies_on(seam: TracedSeam, plane, tolerance_m: float) -> bool:
 
 def formed_with(seam: TracedSeam, surface, plane, tolerance_m: float) -> bool:
     """Whether at half or more of up to SIDE_SAMPLES points along the seam, SIDE_SHARE of the
-    fine surface's points on one side of it (SIDE_NEAR_M to SIDE_FAR_M across the seam, within
-    SIDE_SLAB_M along it) lie within tolerance_m / 2 of `plane` (point, unit normal)."""
+    fine surface's points on one side of it (across it, SIDE_NEAR_M to SIDE_FAR_M from the seam
+    line, within SIDE_SLAB_M along it) lie within tolerance_m / 2 of `plane` (point, unit normal).
+    Distances are taken from the line, not across alone: where a corner's torch axis leans, a face
+    lies partly under it, and a corner fitted 3.5 mm up a bar standing on the table, its axis
+    level, has the table 3.5 mm below it and never 4 mm across."""
     centre, normal = plane
     positions, axes = seam.positions_m, seam.torch_axes
     travel = np.gradient(positions, axis=0) if len(positions) > 1 else np.zeros_like(positions)
@@ -86,9 +89,10 @@ def formed_with(seam: TracedSeam, surface, plane, tolerance_m: float) -> bool:
         near = surface.points.take(members, axis=0)
         offsets = near - positions[k]
         across, along = offsets @ lateral, offsets @ t
+        apart = np.linalg.norm(offsets - along[:, None] * t, axis=1)  # from the seam line
         on_plane = np.abs((near - centre) @ normal) <= tolerance_m / 2
         for side in (-1.0, 1.0):
-            beside = (np.abs(along) <= SIDE_SLAB_M) & (side * across >= SIDE_NEAR_M)
+            beside = (np.abs(along) <= SIDE_SLAB_M) & (side * across > 0) & (apart >= SIDE_NEAR_M)
             if np.count_nonzero(beside) >= 10 and np.mean(on_plane[beside]) >= SIDE_SHARE:
                 touching += 1
                 break
