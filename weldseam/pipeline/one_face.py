@@ -115,7 +115,7 @@ def _wall_over(looked_at, gap: tuple[float, float], sight) -> bool:
     top = sight(*looked_at)
     if top is None or not gap[0] <= top[0] <= gap[1]:
         return False
-    return all(met is True for met in _met_along(looked_at, top, sight))
+    return all(_met_along(looked_at, top, sight))  # None (the sight meets nothing) is not met
 
 
 def _runs_along(looked_at, top, sight) -> bool:
