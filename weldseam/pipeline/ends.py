@@ -25,6 +25,7 @@ MIN_BEND_RADIUS_M = 0.03
 # 25 mm ring. Near the anchor, within CURVE_FLOOR_M (half an extension step): the curve's noise.
 ONE_FACE_DRIFT = 0.08
 CURVE_FLOOR_M = 0.001
+CURVE_SIGMAS = 2.0
 # Where the camera sees this much past the seam line of a joint whose seam point lies on the part's
 # surfaces (joints.ON_SURFACE), the part is not there: their own faces, with 1-2 mm of ripple and
 # depth steps, lie within -5..+1.6 mm of it along the line of sight over the corner ends of seeds
@@ -123,13 +124,27 @@ def seam_line(points: np.ndarray) -> SeamLine | None:
     return SeamLine(centre, direction if direction @ (window[0] - window[-1]) >= 0 else -direction)
 
 
-def on_curve(anchor, direction, bend, arc_m: float, point, axis) -> bool:
+def on_curve(anchor, direction, bend, arc_m: float, point, axis, scatter_m: float = 0.0) -> bool:
     """Whether `point` (3,), `arc_m` on along a seam from `anchor` (3,), lies within
-    max(CURVE_FLOOR_M, ONE_FACE_DRIFT x arc) of the curve there (end_curve's `direction` and
-    `bend` at the anchor: ahead), sideways of the torch `axis`."""
+    max(CURVE_FLOOR_M + CURVE_SIGMAS x `scatter_m`, ONE_FACE_DRIFT x arc) of the curve there
+    (end_curve's `direction` and `bend` at the anchor: ahead), sideways of the torch `axis`;
+    `scatter_m`: the rms distance of the points the curve was fitted to from it (curve_scatter).
+    The anchor is one of those points, and near it the curve is as uncertain as they scatter (the
+    last full fits at a saddle's flank scatter 0.2-0.5 mm, the curve through them misses the
+    seam by 1-2 mm over the next 4-8 mm); farther on, the drift allowance covers that."""
     predicted, travel = ahead(anchor, direction, bend, arc_m)
     _, sideways = offsets(point, predicted, travel, axis)
-    return sideways <= max(CURVE_FLOOR_M, ONE_FACE_DRIFT * arc_m)
+    return sideways <= max(CURVE_FLOOR_M + CURVE_SIGMAS * scatter_m, ONE_FACE_DRIFT * arc_m)
+
+
+def curve_scatter(points: np.ndarray) -> float:
+    """The rms distance (m) of the last TANGENT_BASELINE_M of arc of `points` (travel order) from
+    the quadratic end_curve fits to them; 0 with fewer than 5 points there."""
+    window, design = _end_window(points)
+    if len(window) < 5:
+        return 0.0
+    residual = window - design @ np.linalg.lstsq(design, window, rcond=None)[0]
+    return float(np.sqrt(np.mean(np.sum(residual**2, axis=1))))
 
 
 # What a full fit is not: a corner with one face unseen, or an outline that misses the points.
@@ -137,11 +152,11 @@ NOT_FULL = PointFlag.ONE_FACE | PointFlag.ROUGH
 
 
 def last_full(positions: np.ndarray, flags: np.ndarray | None) -> tuple:
-    """(index, direction, bend) of a seam's last point fitted with both faces seen and its outline
-    near the points (no NOT_FULL bit; `flags`: its points' PointFlag bits, None: all were so) and
-    the curve of the seam up to it (end_curve); () when there is none (a T-joint seen from above
-    all along: its one-face corners are the seam)."""
+    """(index, direction, bend, scatter) of a seam's last point fitted with both faces seen and its
+    outline near the points (no NOT_FULL bit; `flags`: its points' PointFlag bits, None: all were
+    so), the curve of the seam up to it (end_curve) and that curve's scatter (curve_scatter); ()
+    when there is none (a T-joint seen from above all along: its one-face corners are the seam)."""
     full = np.arange(len(positions)) if flags is None else np.flatnonzero((np.asarray(flags) & NOT_FULL) == 0)
     if len(full) == 0 or full[-1] < 1:
         return ()
-    return (int(full[-1]), *end_curve(positions[: full[-1] + 1]))
+    return (int(full[-1]), *end_curve(positions[: full[-1] + 1]), curve_scatter(positions[: full[-1] + 1]))

@@ -33,8 +33,8 @@ from weldseam.geometry import arc_lengths, bend_corner, even_indices, polyline_l
 from weldseam.pipeline.bridge import GrooveTemplate, groove_template, part_ends_ahead
 from weldseam.pipeline.carried import CornerTemplate, corner_template
 from weldseam.pipeline.ends import (
-    CORNER_PAST_M, END_BASELINE_M, NOT_FULL, TANGENT_BASELINE_M, SeamLine, ahead, end_curve, last_full, on_curve,
-    seam_line,
+    CORNER_PAST_M, END_BASELINE_M, NOT_FULL, TANGENT_BASELINE_M, SeamLine, ahead, curve_scatter, end_curve, last_full,
+    on_curve, seam_line,
 )
 from weldseam.pipeline.joints import ON_SURFACE, JointKind
 from weldseam.pipeline.parallel import map_shared
@@ -168,7 +168,7 @@ class SeamEnd:
     end last), where its current face begins (after a turn over an edge), the curve it is
     predicted along, the step and the longest skip over failed sections (m), the groove
     templates of its fits (a groove only), the curve at its last
-    fit with both faces seen: (index, direction, bend), and the across_spread of its last fit
+    fit with both faces seen: (index, direction, bend, scatter), and the across_spread of its last fit
     (JointGeometry; at first the seam's)."""
 
     positions: list
@@ -203,9 +203,9 @@ class SeamEnd:
     def on_curve(self, point: np.ndarray) -> bool:
         """Whether `point` (3,), reached from the last point, lies near the curve at the last fit
         with both faces seen (last_full; ends.on_curve), sideways of the torch axis."""
-        index, direction, bend = self.last_full
+        index, direction, bend, scatter = self.last_full
         arc = polyline_length(np.array(self.positions[index:])) + float(np.linalg.norm(point - self.positions[-1]))
-        return on_curve(np.asarray(self.positions[index]), direction, bend, arc, point, self.axes[-1])
+        return on_curve(np.asarray(self.positions[index]), direction, bend, arc, point, self.axes[-1], scatter)
 
     def heading(self) -> tuple[np.ndarray, np.ndarray]:
         """(direction, bend) to predict the next step along: past bridged points along the curve
@@ -279,7 +279,7 @@ class SeamEnd:
             self.direction, self.bend = end_curve(fitted)
         last = step.fits[-1]
         if not (last.bridged or last.flags & NOT_FULL):
-            self.last_full = (len(self.positions) - 1, self.direction, self.bend)
+            self.last_full = (len(self.positions) - 1, self.direction, self.bend, curve_scatter(fitted))
 
 
 def extend_end(

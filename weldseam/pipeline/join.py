@@ -216,11 +216,11 @@ def _inferred_follows(a: TracedSeam, b: TracedSeam) -> bool:
         full = last_full(measured.positions_m, measured.point_flags)
         if not full or np.any((inferred.point_flags & NOT_FULL) == 0):
             continue
-        index, direction, bend = full
+        index, direction, bend, scatter = full
         start = polyline_length(measured.positions_m[index:])
         steps = np.linalg.norm(np.diff(np.vstack([measured.positions_m[-1:], inferred.positions_m]), axis=0), axis=1)
         axis = measured.torch_axes[-1]
-        if not all(on_curve(measured.positions_m[index], direction, bend, start + arc, point, axis)
+        if not all(on_curve(measured.positions_m[index], direction, bend, start + arc, point, axis, scatter)
                    for arc, point in zip(np.cumsum(steps), inferred.positions_m)):  # fmt: skip
             return False
     return True
