@@ -328,7 +328,7 @@ def _seek_step(extension: Extension, end: SeamEnd, template: GrooveTemplate | Co
     running off the pipe's foot along the line of sight."""
     line = seam_line(end.fitted)
     for heading in end.aims(line):
-        fit = next_fit(extension, end.positions[-1], end.axes[-1], heading, template, line)
+        fit = next_fit(extension, end.positions[-1], end.axes[-1], heading, template, line, end.spread)
         if fit is not None and end.admits(fit):
             return Step([fit])
     return None

@@ -22,7 +22,8 @@ class Extension:
 
 
 def next_fit(extension: Extension, last_point, last_axis, heading,
-             template: GrooveTemplate | CornerTemplate | None = None, line: SeamLine | None = None):
+             template: GrooveTemplate | CornerTemplate | None = None, line: SeamLine | None = None,
+             end_spread: float | None = None):
     """The next fit along the curve predicted from the end (ends.ahead of `heading`: (direction,
     bend)), stepping over failed sections up to max_skip_m, or None. Where a section fails and
     the groove's template is known, it is bridged (a dropout over part of the groove:
@@ -45,14 +46,17 @@ def next_fit(extension: Extension, last_point, last_axis, heading,
     Every bound is widened by the fit's across_spread: a shallow corner's point is known that
     much less well across than its faces are in depth, and where its fits scatter across (a
     valley of 130-150 degrees in a sensor's ripple: 2-4 mm), the curve predicted through them
-    leans by as much, across and, as it rises or falls with them, in depth."""
+    leans by as much, across and, as it rises or falls with them, in depth. A fit widens them no
+    more than the seam's end does (`end_spread`, its last fit's; None: the fit's own): a fit of a
+    flatter corner than the seam's would otherwise take itself 5-6 times as far sideways (a
+    160-degree "corner" of ripple on a tube beside the valley, 14 mm off it)."""
     step = extension.params.step_m
     direction, bend = heading
     distance = step
     while distance <= extension.params.max_skip_m:
         predicted, travel = ahead(last_point, direction, bend, distance)
         fit, depth, sideways = section_at(extension, predicted, travel, last_axis, template)
-        spread = fit.geometry.across_spread
+        spread = fit.geometry.across_spread if end_spread is None else min(fit.geometry.across_spread, end_spread)
         near = (sideways <= sideways_reach_m(step, distance) * spread
                 and depth <= max(0.5 * step, 0.2 * distance) * spread)
         on_line = line is not None and line.holds(fit.point_m, last_axis, step * spread)
