@@ -364,7 +364,7 @@ def one_face_ahead(on_ring: bool, flags: int = int(PointFlag.ONE_FACE)):
     the ring of RING_RADIUS_M (a fillet's foot), or on the tangent line from the ring's point at
     angle 0 (a shadow's edge past a standing pipe's silhouette, running off along the line of sight)."""
 
-    def fit(extension, last_point, last_axis, direction, bend, template=None):
+    def fit(extension, last_point, last_axis, heading, template=None, line=None, end_spread=None):
         if on_ring:
             angle = np.arctan2(last_point[1], last_point[0]) + STEP_M / RING_RADIUS_M
             point = RING_RADIUS_M * np.array([np.cos(angle), np.sin(angle), 0.0])
