@@ -25,6 +25,8 @@ MIN_BEND_RADIUS_M = 0.03
 # 25 mm ring. Near the anchor, within CURVE_FLOOR_M (half an extension step): the curve's noise.
 ONE_FACE_DRIFT = 0.08
 CURVE_FLOOR_M = 0.001
+# Near the anchor the floor is widened by this many times the rms scatter of the fits the curve
+# was fitted to (curve_scatter): the anchor is one of them, and the curve leans with them.
 CURVE_SIGMAS = 2.0
 # Where the camera sees this much past the seam line of a joint whose seam point lies on the part's
 # surfaces (joints.ON_SURFACE), the part is not there: their own faces, with 1-2 mm of ripple and
