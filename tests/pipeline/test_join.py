@@ -159,3 +159,21 @@ def test_a_rough_piece_past_a_seams_end_joins_only_along_its_curve():
     assert len(join([seam, piece(turning)])) == 1
     in_line = line([0.11, 0, 0], [0.124, 0, 0])
     assert len(join([seam, replace(piece(in_line), flags=np.full(len(in_line), int(PointFlag.ROUGH), np.uint8))])) == 1
+
+
+def test_a_zigzag_piece_is_joined_on_with_its_near_end_first():
+    # Pieces traced on broad fillet_t 3 (with sight lines 20 mm past a face's end): a seam's end
+    # (its point 214 at x = -26.4 mm, running on toward -x) and a 3-point piece 19-23 mm beyond it
+    # whose middle point, a rough corner with one face unseen, lies 6 mm off: 12.8 mm of polyline
+    # over 4.5 mm between its ends. Its "direction" runs across the seam; it has none of its own,
+    # and goes on the seam's end near end first (x -45.3, -48.1, -49.5 mm), not far end first
+    # (the path ran back 4 mm with a corner 0.7 mm off inserted before it).
+    seam_end = np.array([[-26.43, 9.2, 8.45], [-22.14, 8.52, 8.51], [-19.58, 7.94, 8.36], [-17.45, 7.61, 8.35],
+                         [-13.67, 7.26, 8.5], [-11.72, 6.84, 8.32], [-9.3, 6.35, 8.23], [-7.47, 6.15, 8.19]]) / 1000
+    zigzag = np.array([[-49.49, 12.16, 8.43], [-48.14, 6.53, 11.39], [-45.31, 11.44, 8.35]]) / 1000
+    axis = np.array([-0.1, -0.70, -0.705])
+    pieces = [TracedSeam(points, np.tile(axis / np.linalg.norm(axis), (len(points), 1)), False, JointKind.FILLET, 1.0)
+              for points in (seam_end, zigzag)]
+    (joined,) = join_pieces(pieces, join_m=0.025, max_turn_deg=100.0, step_m=0.002)
+    x = joined.positions_m[:, 0] if joined.positions_m[0, 0] > -0.03 else joined.positions_m[::-1, 0]
+    assert np.all(np.diff(x) < 0.0005)  # on toward -x all the way: no step back

@@ -157,13 +157,13 @@ def _joined(
             if distance > join_m or (best is not None and distance >= best[0]):
                 continue
             out_a, out_b = end_direction(a, at_start=False), end_direction(b, at_start=True)
-            # A piece shorter than the direction baseline has no direction of its own.
-            facing = polyline_length(b) < END_BASELINE_M or polyline_length(a) < END_BASELINE_M or -out_a @ out_b >= cos_turn
-            # Through a bend the gap runs along the mean of the two directions; a piece too
-            # short to have a direction defers to the other.
-            if polyline_length(a) < END_BASELINE_M:
+            # A piece without a direction of its own (_directed) faces any way.
+            facing = not _directed(b) or not _directed(a) or -out_a @ out_b >= cos_turn
+            # Through a bend the gap runs along the mean of the two directions; a piece without
+            # a direction of its own defers to the other.
+            if not _directed(a):
                 reference = -out_b
-            elif polyline_length(b) < END_BASELINE_M:
+            elif not _directed(b):
                 reference = out_a
             else:
                 reference = unit(out_a - out_b)
@@ -186,11 +186,11 @@ def _continues(a: TracedSeam, b: TracedSeam, step_m: float) -> bool:
     each within CONTINUE_SLACK x what an extension stepping `step_m` takes across the gap
     (ends.sideways_reach_m) sideways of the torch axis, widened by the pieces' across_spread: a
     piece's end curve, its bend read over its last few points, may miss by that much across a
-    wider gap. A piece too short for a direction defers to the other. Beside a
+    wider gap. A piece without a direction of its own (_directed) defers to the other. Beside a
     tack weld, a chain on its edge fits a groove 3-4 mm off the seam over 20 mm, its line turned
     25 degrees from the seam's, and its curve misses the seam's end by 10 mm: no piece of it."""
     for before, after in ((a, b), (b.reversed(), a.reversed())):
-        if polyline_length(before.positions_m) < END_BASELINE_M:
+        if not _directed(before.positions_m):
             continue
         last = before.positions_m[-1]
         direction, bend = end_curve(before.positions_m)
@@ -228,9 +228,9 @@ def _inferred_follows(a: TracedSeam, b: TracedSeam) -> bool:
 
 def _corner(a: np.ndarray, out_a: np.ndarray, b: np.ndarray, out_b: np.ndarray, join_m: float):
     """The bend between piece a's end and piece b's start, or None for a straight bridge: where
-    both carried straight on meet, or, when one is too short to have a direction, where the
+    both carried straight on meet, or, when one has no direction of its own, where the
     other turns to reach it."""
-    a_long, b_long = polyline_length(a) >= END_BASELINE_M, polyline_length(b) >= END_BASELINE_M
+    a_long, b_long = _directed(a), _directed(b)
     if a_long and b_long:
         return bend_corner(a[-1], out_a, b[0], out_b, join_m)
     if a_long:
@@ -238,6 +238,15 @@ def _corner(a: np.ndarray, out_a: np.ndarray, b: np.ndarray, out_b: np.ndarray, 
     if b_long:
         return corner_before(b[0], out_b, a[-1])
     return None
+
+
+def _directed(points: np.ndarray) -> bool:
+    """Whether a piece (K, 3) has a direction of its own: its ends END_BASELINE_M apart, or its
+    polyline twice that long (a ring's piece nearly closed). A polyline barely that long whose
+    ends are not zigzags: a 3-point piece whose middle point lies 6 mm off (12.8 mm of polyline
+    over 4.5 mm) has a "direction" across the seam, and was joined on far end first."""
+    return bool(np.linalg.norm(points[-1] - points[0]) >= END_BASELINE_M
+                or polyline_length(points) >= 2 * END_BASELINE_M)
 
 
 def _junction(point: np.ndarray, others: list[TracedSeam], join_m: float) -> bool:
