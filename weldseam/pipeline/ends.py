@@ -55,15 +55,31 @@ def end_curve(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     1/MIN_BEND_RADIUS_M. The seam ahead is predicted as p + d t + d^2 k / 2 (ahead). A chord
     or principal direction over that stretch of a curve of radius R leans back by baseline / 2R
     (0.1 rad over 12 mm at R = 60 mm), which is 0.2 mm sideways per 2 mm step."""
+    tangent, bend, _ = end_fit(points)
+    return tangent, bend
+
+
+def curve_scatter(points: np.ndarray) -> float:
+    """The rms distance (m) of the last TANGENT_BASELINE_M of arc of `points` (travel order) from
+    the quadratic end_curve fits to them; 0 with fewer than 5 points there."""
+    return end_fit(points)[2]
+
+
+def end_fit(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    """end_curve's tangent and curvature vector and curve_scatter's rms distance, from one fit;
+    with fewer than 5 points within TANGENT_BASELINE_M, the end's direction (end_direction), no
+    bend and no scatter."""
     window, design = _end_window(points)
     if len(window) < 5:
-        return end_direction(points, at_start=False), np.zeros(3)
+        return end_direction(points, at_start=False), np.zeros(3), 0.0
     coefficients = np.linalg.lstsq(design, window, rcond=None)[0]
+    residual = window - design @ coefficients
+    scatter = float(np.sqrt(np.mean(np.sum(residual**2, axis=1))))
     tangent = unit(-coefficients[1])
     bend = 2 * coefficients[2]
     bend -= (bend @ tangent) * tangent
     size = np.linalg.norm(bend)
-    return tangent, bend * min(1.0, 1.0 / (MIN_BEND_RADIUS_M * size)) if size > 0 else bend
+    return tangent, bend * min(1.0, 1.0 / (MIN_BEND_RADIUS_M * size)) if size > 0 else bend, scatter
 
 
 def _end_window(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -139,16 +155,6 @@ def on_curve(anchor, direction, bend, arc_m: float, point, axis, scatter_m: floa
     return sideways <= max(CURVE_FLOOR_M + CURVE_SIGMAS * scatter_m, ONE_FACE_DRIFT * arc_m)
 
 
-def curve_scatter(points: np.ndarray) -> float:
-    """The rms distance (m) of the last TANGENT_BASELINE_M of arc of `points` (travel order) from
-    the quadratic end_curve fits to them; 0 with fewer than 5 points there."""
-    window, design = _end_window(points)
-    if len(window) < 5:
-        return 0.0
-    residual = window - design @ np.linalg.lstsq(design, window, rcond=None)[0]
-    return float(np.sqrt(np.mean(np.sum(residual**2, axis=1))))
-
-
 # What a full fit is not: a corner with one face unseen, or an outline that misses the points.
 NOT_FULL = PointFlag.ONE_FACE | PointFlag.ROUGH
 
@@ -156,9 +162,9 @@ NOT_FULL = PointFlag.ONE_FACE | PointFlag.ROUGH
 def last_full(positions: np.ndarray, flags: np.ndarray | None) -> tuple:
     """(index, direction, bend, scatter) of a seam's last point fitted with both faces seen and its
     outline near the points (no NOT_FULL bit; `flags`: its points' PointFlag bits, None: all were
-    so), the curve of the seam up to it (end_curve) and that curve's scatter (curve_scatter); ()
+    so), the curve of the seam up to it and that curve's scatter (end_fit); ()
     when there is none (a T-joint seen from above all along: its one-face corners are the seam)."""
     full = np.arange(len(positions)) if flags is None else np.flatnonzero((np.asarray(flags) & NOT_FULL) == 0)
     if len(full) == 0 or full[-1] < 1:
         return ()
-    return (int(full[-1]), *end_curve(positions[: full[-1] + 1]), curve_scatter(positions[: full[-1] + 1]))
+    return (int(full[-1]), *end_fit(positions[: full[-1] + 1]))

@@ -33,7 +33,7 @@ from weldseam.geometry import arc_lengths, bend_corner, even_indices, polyline_l
 from weldseam.pipeline.bridge import GrooveTemplate, groove_template, part_ends_ahead
 from weldseam.pipeline.carried import CornerTemplate, corner_template
 from weldseam.pipeline.ends import (
-    CORNER_PAST_M, END_BASELINE_M, NOT_FULL, TANGENT_BASELINE_M, SeamLine, ahead, curve_scatter, end_curve, last_full,
+    CORNER_PAST_M, END_BASELINE_M, NOT_FULL, TANGENT_BASELINE_M, SeamLine, ahead, end_curve, end_fit, last_full,
     on_curve, seam_line,
 )
 from weldseam.pipeline.joints import ON_SURFACE, JointKind
@@ -275,11 +275,12 @@ class SeamEnd:
             self.templates += [groove_template(extension.surface, f, self.direction)
                                for f in step.fits if not f.bridged]  # fmt: skip
         fitted = self.fitted
+        scatter = 0.0
         if len(fitted) >= 3:
-            self.direction, self.bend = end_curve(fitted)
+            self.direction, self.bend, scatter = end_fit(fitted)
         last = step.fits[-1]
         if not (last.bridged or last.flags & NOT_FULL):
-            self.last_full = (len(self.positions) - 1, self.direction, self.bend, curve_scatter(fitted))
+            self.last_full = (len(self.positions) - 1, self.direction, self.bend, scatter)
 
 
 def extend_end(

@@ -149,6 +149,8 @@ def _joined(
 ) -> tuple[float, TracedSeam] | None:
     """(gap, joined seam) for the closest way to join two pieces end to end, or None."""
     best = None
+    # Whether each piece has a direction of its own does not depend on which way it runs.
+    a_directed, b_directed = _directed(first.positions_m), _directed(second.positions_m)
     for first_way in (first, first.reversed()):
         for second_way in (second, second.reversed()):
             a, b = first_way.positions_m, second_way.positions_m
@@ -158,12 +160,12 @@ def _joined(
                 continue
             out_a, out_b = end_direction(a, at_start=False), end_direction(b, at_start=True)
             # A piece without a direction of its own (_directed) faces any way.
-            facing = not _directed(b) or not _directed(a) or -out_a @ out_b >= cos_turn
+            facing = not (a_directed and b_directed) or -out_a @ out_b >= cos_turn
             # Through a bend the gap runs along the mean of the two directions; a piece without
             # a direction of its own defers to the other.
-            if not _directed(a):
+            if not a_directed:
                 reference = -out_b
-            elif not _directed(b):
+            elif not b_directed:
                 reference = out_a
             else:
                 reference = unit(out_a - out_b)
