@@ -98,6 +98,28 @@ def test_a_box_on_the_table_is_not_a_fillet_but_on_a_flange_it_is(rng):
     assert [p.joint for p in plan(fillet_cloud(rng), [0.0, 0.3, 0.3]).paths] == ["fillet"]
 
 
+def test_an_outside_corner_with_one_face_unseen_is_found_between_the_vs_edges(rng):
+    """Two plates meet square at a convex ridge along x, their V's edges 2.5 mm either side of the
+    seam (y = 0, z = 50 mm), the ridge's bisector up. The camera on face A's side (y < 0) sees A
+    squarely and the V's far wall; face B (y > 0) faces it at 80 degrees of incidence and has no
+    points. The seam is placed between the V's edges, the torch down the bisector, each pose saying
+    one face was unseen."""
+    root = np.sqrt(0.5)
+    face = [(-0.0025 - root * s, -root * s) for s in np.arange(0.0, 0.045, 0.0005)]  # down-left from E_A
+    wall = [(0.0025 * t, -0.004 + 0.004 * t) for t in np.linspace(0.0, 1.0, 9)]  # root up to E_B
+    section = np.array(face + wall)
+    x = np.arange(-0.08, 0.08, 0.0006)
+    points = np.column_stack([np.repeat(x, len(section)), np.tile(section, (len(x), 1))])
+    points[:, 2] += 0.05 + rng.normal(0.0, 0.0002, len(points))
+    result = plan(points, [0.0, -0.25, 0.40])
+    (path,) = result.paths
+    assert path.joint == "outside_corner" and path.length_m > 0.15
+    assert np.abs(path.positions_m[:, 1]).max() < 0.0005 and np.abs(path.positions_m[:, 2] - 0.05).max() < 0.0005
+    assert np.degrees(np.arccos(-path.rotations[:, 2, 2])).max() < 2.0
+    assert np.all(path.pose_confidence == 0.7)
+    assert any("the unseen face is taken square to the seen one" in w for w in result.warnings)
+
+
 def test_a_t_joint_seen_from_above_is_found_where_the_flange_ends_under_the_web(rng):
     """The camera looks down a T-joint's web: its face at y = 0 is seen edge-on (88 degrees of
     incidence) and has no points; the flange (z = 0, 0 < y < 80 mm) ends at its foot, the web's top

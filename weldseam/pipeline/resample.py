@@ -170,7 +170,9 @@ def resample_flags(positions: np.ndarray, flags: np.ndarray, *, spacing_m: float
     return knots[after] | knots[np.maximum(after - 1, 0)]
 
 
-def one_face_warning(seam_id: int, length_m: float) -> str:
-    """The warning for a corner seen with one face only over `length_m` of seam `seam_id`."""
-    return (f"seam {seam_id}: one face of the corner was not seen over {length_m * 1000:.0f} mm (seen too "
-            "obliquely): the corner is placed where the other face ends, under the wall's top")
+def one_face_warning(seam_id: int, length_m: float, joint: str) -> str:
+    """The warning for a corner (of kind `joint`) seen with one face only over `length_m` of seam
+    `seam_id`."""
+    placed = ("the unseen face is taken square to the seen one, the seam between the V's edges"
+              if joint == "outside_corner" else "the corner is placed where the other face ends, under the wall's top")
+    return f"seam {seam_id}: one face of the corner was not seen over {length_m * 1000:.0f} mm (seen too obliquely): {placed}"

@@ -20,6 +20,7 @@ from weldseam.pipeline.joints import JointGeometry, JointKind, ProfileFit, akin,
 from weldseam.pipeline.joints.profile import NO_OPENINGS
 from weldseam.pipeline.occlusion import ViewBuffer
 from weldseam.pipeline.one_face import one_face_corner
+from weldseam.pipeline.one_face_ridge import one_face_ridge
 from weldseam.pipeline.parallel import map_shared
 
 # A fit of a kind that assumes the joint in the middle of its window (joints.recentred) made
@@ -61,8 +62,9 @@ def section_params(config: PlanConfig) -> SectionParams:
 
 class PointFlag(IntFlag):
     """What a seam point rests on besides a full fit of its section: one face of a corner unseen
-    (one_face), maybe placed from an occluder's outline; a groove bridged over a dropout from the
-    edges still seen (bridge); a stretch interpolated across a hole in the scan (holes)."""
+    (one_face, one_face_ridge), maybe placed from an occluder's outline; a groove bridged over a
+    dropout from the edges still seen (bridge); a stretch interpolated across a hole in the scan
+    (holes)."""
 
     ONE_FACE = 1
     BRIDGED = 2
@@ -199,18 +201,17 @@ class FineSurface:
 
     def fit_profile(self, profile: Profile, kinds: Collection[JointKind] | None = None) -> SectionFit:
         """fit_profile of a section's points, in 3D; where no model fits, a fillet, lap or outside
-        corner sought in the window half as wide (_narrow), then, where an inside corner may be
-        sought, an inside corner with one face unseen (one_face.one_face_corner)."""
+        corner sought in the window half as wide (_narrow), then, with a single camera, a corner of
+        a sought kind with one face unseen (_one_face)."""
         found = fit_profile(profile.u, profile.w, self.params.joints, kinds, profile.openings_u)
         if isinstance(found, ProfileFit):
             return profile.to_3d(found)
         narrow = self._narrow(profile, kinds)
         if narrow is not None:
             return profile.to_3d(narrow)
-        if self.view is not None and (kinds is None or JointKind.FILLET in kinds):
-            corner = self._one_face(profile)
-            if corner is not None:
-                return profile.to_3d(corner)
+        corner = self._one_face(profile, kinds) if self.view is not None else None
+        if corner is not None:
+            return profile.to_3d(corner)
         return profile.to_3d(None, reason=found.reason)
 
     def _narrow(self, profile: Profile, kinds: Collection[JointKind] | None) -> ProfileFit | None:
@@ -227,13 +228,20 @@ class FineSurface:
         found = fit_profile(profile.u[near], profile.w[near], self.params.joints, sought)
         return found if isinstance(found, ProfileFit) else None
 
-    def _one_face(self, profile: Profile) -> ProfileFit | None:
+    def _one_face(self, profile: Profile, kinds: Collection[JointKind] | None) -> ProfileFit | None:
+        """A corner of the sought `kinds` with one face unseen: an inside corner (one_face), else an
+        outside corner (one_face_ridge); None where neither is sought or fits."""
         toward = unit(self.view.camera_m - profile.centre)
         order = np.argsort(profile.u, kind="stable")
-        return one_face_corner(
-            profile.u[order], profile.w[order], (float(toward @ profile.lateral), float(-(toward @ profile.axis))),
-            lambda u, w, along=0.0: self.sight(profile, u, w, along), self.params.joints, self.params.half_width_m,
-        )
+        u, w = profile.u[order], profile.w[order]
+        toward_uw = (float(toward @ profile.lateral), float(-(toward @ profile.axis)))
+        corner = None
+        if kinds is None or JointKind.FILLET in kinds:
+            corner = one_face_corner(u, w, toward_uw, lambda u, w, along=0.0: self.sight(profile, u, w, along),
+                                     self.params.joints, self.params.half_width_m)  # fmt: skip
+        if corner is None and (kinds is None or JointKind.OUTSIDE_CORNER in kinds):
+            corner = one_face_ridge(u, w, toward_uw, self.params.joints, self.params.half_width_m)
+        return corner
 
     def fit_many(self, centres, travel, axes, lateral, kinds: Collection[JointKind] | None = None) -> list[SectionFit]:
         """One fit per section (centres, travel, axes, lateral: (K, 3) each, a frame per row, as
