@@ -23,6 +23,8 @@ opening line, or the wall leans outside WALL_MIN_DEG-WALL_MAX_DEG off the bisect
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from weldseam.config import JointsConfig
@@ -31,8 +33,11 @@ from weldseam.pipeline.joints import JointGeometry, JointKind, ProfileFit
 from weldseam.pipeline.joints.robust import line, middle, noise
 
 KIND = JointKind.OUTSIDE_CORNER
-# The seen face: straight (FACE_INLIERS of the points on its side of the V within max(3 sigma,
-# FACE_BAND_M) of its line), as long as this without gaps over FACE_GAP_M.
+# The fewest points a line (the seen face, the far wall) is fitted to.
+MIN_LINE_POINTS = 5
+# The seen face: straight (FACE_INLIERS of the points up to its end within max(3 sigma,
+# FACE_BAND_M) of its line), this long from its first point to its end; its points' runs are split
+# at gaps over FACE_GAP_M.
 MIN_FACE_M = 0.012
 FACE_INLIERS = 0.8
 FACE_BAND_M = 0.0012
@@ -49,14 +54,13 @@ OBLIQUE_COS = 0.34
 # The V's opening (m), as the outside corner model takes it.
 MIN_OPENING_M = 0.0015
 MAX_OPENING_M = 0.020
-# The far wall: at least this many points on its line (within max(3 sigma, WALL_BAND_M)), this
+# The far wall: at least MIN_LINE_POINTS on its line (within max(3 sigma, WALL_BAND_M)), this
 # share of those beyond E_A within MAX_OPENING_M, its top within max(3 sigma, TOP_BAND_M) of the
 # opening line (a surface going on past it is no wall ending at an edge), leaning WALL_MIN_DEG-
 # WALL_MAX_DEG off the bisector toward face B: a V of 10-80 degrees cut about the bisector (its
 # walls measured 6-35 degrees off it on broad outside corners). A wall leaning 45 degrees runs
 # parallel to face A: a lower surface going on past A's end (the table beyond a thick plate's
 # edge, measured 43-45 degrees) shows the same, so an open corner's 90-degree V is not taken so.
-MIN_WALL_POINTS = 5
 WALL_INLIERS = 0.6
 WALL_BAND_M = 0.0005
 TOP_BAND_M = 0.001
@@ -70,47 +74,56 @@ ROOT_SLACK_M = 0.001
 ABOVE_BAND_M = 0.0012
 
 
+class SeenFace(NamedTuple):
+    """The seen face: its line w = intercept + slope u, the u (m) where it ends toward the V, its
+    robust noise sigma (m) and the median distance of its points from the line (m)."""
+
+    intercept: float
+    slope: float
+    end_u: float
+    sigma: float
+    residual_m: float
+
+
 def one_face_ridge(u: np.ndarray, w: np.ndarray, toward, params: JointsConfig, half_width_m: float) -> ProfileFit | None:
     """The outside corner of a profile (u ascending, m; the window |u|, |w| <= half_width_m) whose
     face beyond the V is unseen, or None. `toward`: (u, w) of the unit direction toward the camera
     in the section plane. The V beside the seen face's end nearest the section's centre wins where
     both sides qualify."""
-    found = [fit for fit in (_ridge(u, w, toward, params), _mirrored(u, w, toward, params)) if fit is not None]
-    # The V's far edge lies inside the window: beyond its edge, the window shows nothing.
-    found = [fit for fit in found if np.abs(fit.outline[3]).max() <= half_width_m - MAX_OPENING_M / 2]
+    found = [fit for fit in (_ridge(u, w, toward, params, half_width_m), _mirrored(u, w, toward, params, half_width_m))
+             if fit is not None]  # fmt: skip
     return min(found, key=lambda fit: abs(fit.u)) if found else None
 
 
-def _mirrored(u, w, toward, params: JointsConfig) -> ProfileFit | None:
+def _mirrored(u, w, toward, params: JointsConfig, half_width_m: float) -> ProfileFit | None:
     """_ridge of the profile mirrored across u = 0 (the seen face on the right), mirrored back."""
-    fit = _ridge(-u[::-1], w[::-1], (-toward[0], toward[1]), params)
+    fit = _ridge(-u[::-1], w[::-1], (-toward[0], toward[1]), params, half_width_m)
     if fit is None:
         return None
     outline = tuple((-a, b) for a, b in fit.outline[::-1])
     return ProfileFit(fit.kind, -fit.u, fit.w, -fit.axis_u, fit.axis_w, fit.residual_m, fit.geometry, outline)
 
 
-def _ridge(u, w, toward, params: JointsConfig) -> ProfileFit | None:
+def _ridge(u, w, toward, params: JointsConfig, half_width_m: float) -> ProfileFit | None:
     """The corner whose seen face A lies left of the V (A's end toward larger u), or None."""
-    if len(u) < 2 * MIN_WALL_POINTS:
+    if len(u) < 2 * MIN_LINE_POINTS:
         return None
     face = _seen_face(u, w)
     if face is None:
         return None
-    (intercept, slope), end_u, sigma, residual_m = face
-    a = unit(np.array([1.0, slope]))  # along A toward the V: face B's outward normal
+    a = unit(np.array([1.0, face.slope]))  # along A toward the V: face B's outward normal
     normal = np.array([-a[1], a[0]])  # A's outward normal (w up)
     if normal @ toward <= 0 or a @ toward > OBLIQUE_COS:
         return None  # A seen from behind, or B would face the camera
     bisector, opening = unit(normal + a), unit(a - normal)
-    edge_a = np.array([end_u, intercept + slope * end_u])
+    edge_a = np.array([face.end_u, face.intercept + face.slope * face.end_u])
     offsets = np.column_stack([u, w]) - edge_a
     across, up = offsets @ opening, offsets @ bisector
     beyond = across > 0
-    if np.any(beyond & (up > max(3 * sigma, ABOVE_BAND_M))):
+    if np.any(beyond & (up > max(3 * face.sigma, ABOVE_BAND_M))):
         return None  # a surface going on beyond the V, or a wall rising: no convex edge
     beyond &= across <= MAX_OPENING_M
-    wall = _far_wall(across[beyond], up[beyond], sigma, params)
+    wall = _far_wall(across[beyond], up[beyond], face.sigma, params)
     if wall is None:
         return None
     width_m, depth_m = wall
@@ -118,20 +131,25 @@ def _ridge(u, w, toward, params: JointsConfig) -> ProfileFit | None:
         return None
     seam = edge_a + opening * width_m / 2
     edge_b = edge_a + opening * width_m
+    # The window must show what lies past the far edge (whether a surface goes on above the opening
+    # line there): a "far edge" near its rim may be a surface running out of it.
+    if np.abs(edge_b).max() > half_width_m - MAX_OPENING_M / 2:
+        return None
     geometry = JointGeometry(opening_m=float(width_m), depth_m=float(depth_m), faces_seen=1)
     outline = (edge_a - a, edge_a, seam - bisector * depth_m, edge_b, edge_b - normal)
-    return ProfileFit(KIND, float(seam[0]), float(seam[1]), float(-bisector[0]), float(-bisector[1]), residual_m,
+    return ProfileFit(KIND, float(seam[0]), float(seam[1]), float(-bisector[0]), float(-bisector[1]), face.residual_m,
                       geometry, tuple((float(p), float(q)) for p, q in outline))  # fmt: skip
 
 
-def _seen_face(u, w):
-    """((intercept, slope), end u, noise, residual) of the seen face: a robust line started from the
-    left half of the points, its inliers' run from the left that fills MIN_FACE_M with gaps under
-    FACE_GAP_M, its end half a point spacing past its last point (a hidden wall's edge lies there);
-    None where the face is not straight or too short."""
+def _seen_face(u, w) -> SeenFace | None:
+    """The seen face, or None where it is not straight or too short: a robust line started from the
+    left half of the points; its end is that of its last run of inliers (gaps under FACE_GAP_M) at
+    least MIN_RUN_M long, the face from its first inlier to there at least MIN_FACE_M long with
+    FACE_INLIERS of the points on it; the line refitted to those, and the end placed half a point
+    spacing past its last point within its own noise (a hidden wall's edge lies there)."""
     inliers = u <= middle(u)
     for _ in range(3):
-        if np.count_nonzero(inliers) < MIN_WALL_POINTS:
+        if np.count_nonzero(inliers) < MIN_LINE_POINTS:
             return None
         intercept, slope = line(u[inliers], w[inliers])
         residual = w - (intercept + slope * u)
@@ -157,7 +175,7 @@ def _seen_face(u, w):
     if len(run) == 0:
         return None
     spacing = middle(np.diff(u[run])[-5:]) if len(run) > 1 else 0.0
-    return (intercept, slope), float(u[run[-1]] + spacing / 2), sigma, middle(np.abs(residual))
+    return SeenFace(intercept, slope, float(u[run[-1]] + spacing / 2), sigma, middle(np.abs(residual)))
 
 
 def _far_wall(across, up, sigma: float, params: JointsConfig) -> tuple[float, float] | None:
@@ -167,17 +185,17 @@ def _far_wall(across, up, sigma: float, params: JointsConfig) -> tuple[float, fl
     V at least groove_min_depth_m deep up to the opening line (within max(3 sigma, TOP_BAND_M)),
     meets it at E_B (up = 0: across = k0). None where no such wall is seen. Face B's own few points
     at grazing incidence are no substitute: a plate's square edge, rounded, shows the same."""
-    if len(across) < MIN_WALL_POINTS:
+    if len(across) < MIN_LINE_POINTS:
         return None
     band = max(3 * sigma, WALL_BAND_M)
     inliers = np.ones(len(across), bool)
     for _ in range(3):
-        if np.count_nonzero(inliers) < MIN_WALL_POINTS:
+        if np.count_nonzero(inliers) < MIN_LINE_POINTS:
             return None
         k0, k1 = line(up[inliers], across[inliers])
         inliers = np.abs(across - (k0 + k1 * up)) <= band
     count = np.count_nonzero(inliers)
-    if count < MIN_WALL_POINTS or count < WALL_INLIERS * len(across):
+    if count < MIN_LINE_POINTS or count < WALL_INLIERS * len(across):
         return None
     lean = np.degrees(np.arctan(k1))  # the wall runs toward face B as it rises
     top, bottom = up[inliers].max(), up[inliers].min()
