@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from weldseam.pipeline.ends import curve_scatter, last_full, on_curve
+from weldseam.pipeline.ends import end_fit, last_full, on_curve
 
 RADIUS_M = 0.04
 AXIS = np.array([0.0, 0.0, -1.0])
@@ -15,12 +15,12 @@ def _ring(arc_m: np.ndarray, radial_m: np.ndarray | float = 0.0) -> np.ndarray:
     return np.column_stack([reach * np.cos(angle), reach * np.sin(angle), np.zeros_like(angle)])
 
 
-def test_curve_scatter_is_the_rms_distance_from_the_fitted_quadratic():
+def test_the_end_fits_scatter_is_the_rms_distance_from_the_fitted_quadratic():
     arc = np.arange(0.0, 0.040, 0.002)
-    clean = curve_scatter(_ring(arc))
+    clean = end_fit(_ring(arc))[2]
     assert clean < 0.0001  # 46 degrees of a 40 mm ring: a quadratic in arc length to 0.1 mm
     noise = np.where(np.arange(len(arc)) % 2, 0.0003, -0.0003)
-    assert 0.0002 <= curve_scatter(_ring(arc, noise)) <= 0.0003 + clean  # of +-0.3 mm, what the fit leaves
+    assert 0.0002 <= end_fit(_ring(arc, noise))[2] <= 0.0003 + clean  # of +-0.3 mm, what the fit leaves
 
 
 def test_a_noisy_ends_band_widens_by_its_scatter():

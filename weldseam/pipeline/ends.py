@@ -26,7 +26,7 @@ MIN_BEND_RADIUS_M = 0.03
 ONE_FACE_DRIFT = 0.08
 CURVE_FLOOR_M = 0.001
 # Near the anchor the floor is widened by this many times the rms scatter of the fits the curve
-# was fitted to (curve_scatter): the anchor is one of them, and the curve leans with them.
+# was fitted to (end_fit): the anchor is one of them, and the curve leans with them.
 CURVE_SIGMAS = 2.0
 # Where the camera sees this much past the seam line of a joint whose seam point lies on the part's
 # surfaces (joints.ON_SURFACE), the part is not there: their own faces, with 1-2 mm of ripple and
@@ -59,16 +59,10 @@ def end_curve(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return tangent, bend
 
 
-def curve_scatter(points: np.ndarray) -> float:
-    """The rms distance (m) of the last TANGENT_BASELINE_M of arc of `points` (travel order) from
-    the quadratic end_curve fits to them; 0 with fewer than 5 points there."""
-    return end_fit(points)[2]
-
-
 def end_fit(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
-    """end_curve's tangent and curvature vector and curve_scatter's rms distance, from one fit;
-    with fewer than 5 points within TANGENT_BASELINE_M, the end's direction (end_direction), no
-    bend and no scatter."""
+    """end_curve's tangent and curvature vector, and the rms distance (m) of the last
+    TANGENT_BASELINE_M of arc of `points` (travel order) from that quadratic, from one fit; with
+    fewer than 5 points there, the end's direction (end_direction), no bend and no scatter."""
     window, design = _end_window(points)
     if len(window) < 5:
         return end_direction(points, at_start=False), np.zeros(3), 0.0
@@ -146,7 +140,7 @@ def on_curve(anchor, direction, bend, arc_m: float, point, axis, scatter_m: floa
     """Whether `point` (3,), `arc_m` on along a seam from `anchor` (3,), lies within
     max(CURVE_FLOOR_M + CURVE_SIGMAS x `scatter_m`, ONE_FACE_DRIFT x arc) of the curve there
     (end_curve's `direction` and `bend` at the anchor: ahead), sideways of the torch `axis`;
-    `scatter_m`: the rms distance of the points the curve was fitted to from it (curve_scatter).
+    `scatter_m`: the rms distance of the points the curve was fitted to from it (end_fit).
     The anchor is one of those points, and near it the curve is as uncertain as they scatter (the
     last full fits at a saddle's flank scatter 0.2-0.5 mm, the curve through them misses the
     seam by 1-2 mm over the next 4-8 mm); farther on, the drift allowance covers that."""

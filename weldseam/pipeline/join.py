@@ -232,12 +232,12 @@ def _corner(a: np.ndarray, out_a: np.ndarray, b: np.ndarray, out_b: np.ndarray, 
     """The bend between piece a's end and piece b's start, or None for a straight bridge: where
     both carried straight on meet, or, when one has no direction of its own, where the
     other turns to reach it."""
-    a_long, b_long = _directed(a), _directed(b)
-    if a_long and b_long:
+    a_directed, b_directed = _directed(a), _directed(b)
+    if a_directed and b_directed:
         return bend_corner(a[-1], out_a, b[0], out_b, join_m)
-    if a_long:
+    if a_directed:
         return corner_before(a[-1], out_a, b[0])
-    if b_long:
+    if b_directed:
         return corner_before(b[0], out_b, a[-1])
     return None
 

@@ -30,30 +30,28 @@ import numpy as np
 from weldseam.config import JointsConfig
 from weldseam.geometry import unit
 from weldseam.pipeline.joints import JointGeometry, JointKind, ProfileFit
+from weldseam.pipeline.joints.outside_corner import (
+    EDGE_SIGMAS, MAX_OPENING_M, MIN_EDGE_BAND_M, MIN_OPENING_M, SURFACE_BAND_M,
+)
 from weldseam.pipeline.joints.robust import line, middle, noise
+from weldseam.pipeline.one_face import OBLIQUE_COS
 
 KIND = JointKind.OUTSIDE_CORNER
 # The fewest points a line (the seen face, the far wall) is fitted to.
 MIN_LINE_POINTS = 5
 # The seen face: straight (FACE_INLIERS of the points up to its end within max(3 sigma,
-# FACE_BAND_M) of its line), this long from its first point to its end; its points' runs are split
-# at gaps over FACE_GAP_M.
+# SURFACE_BAND_M) of its line, the outside corner model's band), this long from its first point to
+# its end; its points' runs are split at gaps over FACE_GAP_M.
 MIN_FACE_M = 0.012
 FACE_INLIERS = 0.8
-FACE_BAND_M = 0.0012
 FACE_GAP_M = 0.002
 # The face ends at the end of its last run of points (gaps under FACE_GAP_M) this long: a few
 # points of the far wall's top within the face's band beyond the V are no face.
 MIN_RUN_M = 0.003
-# The face ends at its last point within max(EDGE_SIGMAS sigma, MIN_EDGE_BAND_M) of its line, as
-# in the outside corner model.
-EDGE_SIGMAS = 2.5
-MIN_EDGE_BAND_M = 0.0003
-# The unseen face B is seen at more than 70 degrees of incidence, or from behind (one_face).
-OBLIQUE_COS = 0.34
-# The V's opening (m), as the outside corner model takes it.
-MIN_OPENING_M = 0.0015
-MAX_OPENING_M = 0.020
+# The face ends at its last point within max(EDGE_SIGMAS sigma, MIN_EDGE_BAND_M) of its line, and
+# the V's opening lies within MIN_OPENING_M-MAX_OPENING_M, as in the outside corner model; the
+# unseen face B is seen at more than 70 degrees of incidence (OBLIQUE_COS), or from behind, as in
+# one_face.
 # The far wall: at least MIN_LINE_POINTS on its line (within max(3 sigma, WALL_BAND_M)), this
 # share of those beyond E_A within MAX_OPENING_M, its top within max(3 sigma, TOP_BAND_M) of the
 # opening line (a surface going on past it is no wall ending at an edge), leaning WALL_MIN_DEG-
@@ -154,7 +152,7 @@ def _seen_face(u, w) -> SeenFace | None:
         intercept, slope = line(u[inliers], w[inliers])
         residual = w - (intercept + slope * u)
         sigma = noise(residual[inliers])
-        inliers = np.abs(residual) <= max(3 * sigma, FACE_BAND_M)
+        inliers = np.abs(residual) <= max(3 * sigma, SURFACE_BAND_M)
     on = np.flatnonzero(inliers)
     if len(on) == 0:
         return None

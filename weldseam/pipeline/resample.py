@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from weldseam.geometry import arc_lengths, frames_from_axes, unit
+from weldseam.pipeline.joints import JointKind
 
 # The travel is fitted over this many times the positions' Gaussian (_steady_travel), except where
 # the seam turns too sharply for a quadratic over that width: where it strays from the samples by
@@ -170,9 +171,9 @@ def resample_flags(positions: np.ndarray, flags: np.ndarray, *, spacing_m: float
     return knots[after] | knots[np.maximum(after - 1, 0)]
 
 
-def one_face_warning(seam_id: int, length_m: float, joint: str) -> str:
+def one_face_warning(seam_id: int, length_m: float, joint: JointKind) -> str:
     """The warning for a corner (of kind `joint`) seen with one face only over `length_m` of seam
     `seam_id`."""
     placed = ("the unseen face is taken square to the seen one, the seam between the V's edges"
-              if joint == "outside_corner" else "the corner is placed where the other face ends, under the wall's top")
+              if joint == JointKind.OUTSIDE_CORNER else "the corner is placed where the other face ends, under the wall's top")
     return f"seam {seam_id}: one face of the corner was not seen over {length_m * 1000:.0f} mm (seen too obliquely): {placed}"

@@ -327,7 +327,7 @@ def _resample(state: PlanState, c: PlanConfig) -> None:
         state.warnings += [resample.hole_warning(seam_id, hole) for hole in seam.holes]
         unseen = np.count_nonzero(flags & PointFlag.ONE_FACE) * spacing
         if unseen:
-            state.warnings.append(resample.one_face_warning(seam_id, unseen, seam.joint.value))
+            state.warnings.append(resample.one_face_warning(seam_id, unseen, seam.joint))
         state.paths.append(WeldPath(
             seam_id=seam_id, positions_m=positions, rotations=rotations, closed=seam.closed,
             joint=seam.joint.value, confidence=seam.confidence, pose_confidence=pose_confidence(flags),
