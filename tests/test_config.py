@@ -92,6 +92,12 @@ def test_a_missing_config_file_is_named(tmp_path):
         ({"condition": {"voxel_m": 0.0}}, "condition.voxel_m must be above 0, got 0.0"),
         ({"order": {"link_m": 0.002}}, "order.link_m 0.002 is below grid.leaf_m 0.003"),
         ({"resample": {"spacing_m": 0.00005}}, "resample.spacing_m 5e-05 is below 0.0001 m"),
+        ({"segment": {"line_valley_length_m": 0.003}},
+         "segment.line_valley_length_m 0.003 must be 0 (off) or 2-40 working voxels (0.005-0.1 m at "
+         "condition.working_voxel_m 0.0025)"),
+        ({"segment": {"line_valley_length_m": 0.2}}, "segment.line_valley_length_m 0.2 must be 0 (off) or 2-40"),
+        ({"segment": {"wide_valley_radius_m": 0.0}},
+         "segment.line_valley_length_m needs segment.wide_valley_radius_m above 0"),
     ],
 )
 def test_parameters_that_cannot_work_together_are_refused_naming_the_key(overrides, message):
@@ -106,5 +112,7 @@ def test_the_relations_allow_the_defaults_and_their_limits():
               **{section: {"radius_m": 0.006} for section in ("smooth", "normals", "descriptor", "boundary")},
               "thinning": {"radius_m": 0.00075}, "segment": {"cluster_tolerance_m": 0.006},
               "order": {"link_m": 0.003}, "resample": {"spacing_m": 0.0001}}
+    limits["segment"]["line_valley_length_m"] = 2 * 0.00075
     config = effective_config(None, limits)
     assert config.normals.radius_m == 8 * config.condition.working_voxel_m
+    assert effective_config(None, {"segment": {"line_valley_length_m": 0.0, "wide_valley_radius_m": 0.0}})

@@ -88,6 +88,14 @@ class SegmentConfig:
         0.02, "valleys: also seek valleys over this radius (a shallow valley between tubes is no deeper than "
         "a sensor's ripple over descriptor.radius_m); 0: off"
     )
+    line_valley_length_m: float = _param(
+        0.03, "valleys: also average each point's valley depth over a line this long along the valley (a valley "
+        "between tubes too shallow for either radius stays along its length; noise does not), sought and traced "
+        "with the wide valleys (needs wide_valley_radius_m); 0: off"
+    )
+    line_valley_min_crease_deg: float = _param(
+        6.5, "valleys along their length: the weakest bend (as min_crease_deg) their averaged depth must show"
+    )
     occluded_ends: bool = _param(
         True, "a single view: also take surface ends past which the camera sees a wall's top (a T-joint seen from "
         "above, its web's face too oblique to measure) as candidates"
@@ -403,6 +411,8 @@ WORKING_RADIUS_KEYS = (
 # defaults (k = 2.4). The automatic threshold's synthetic crease has (6 k)^2 points of pi k^2
 # neighbours each: 0.5 million pairs at 8; the 0.0001 m working voxel that used 24 GB was k = 60.
 MAX_RADIUS_VOXELS = 8.0
+# valley_lines samples each point's line once per working voxel of its length.
+MAX_LINE_VALLEY_VOXELS = 40
 MIN_SPACING_M = 0.0001  # resample smooths with a (K, K) matrix of K = seam length / spacing knots
 
 
@@ -411,6 +421,7 @@ def check_relations(config: PlanConfig) -> None:
     the key. Sizes in POSITIVE_KEYS > 0; condition.working_voxel_m >= condition.voxel_m; each
     radius of WORKING_RADIUS_KEYS (in use) between 1 and MAX_RADIUS_VOXELS working voxels;
     order.link_m >= grid.leaf_m; direction.start_m with rule start-point only;
+    segment.line_valley_length_m 0 or 2-MAX_LINE_VALLEY_VOXELS working voxels, with wide valleys;
     resample.spacing_m >= MIN_SPACING_M."""
 
     def value(key: str) -> float:
@@ -451,6 +462,18 @@ def check_relations(config: PlanConfig) -> None:
         raise InputError(
             "direction.start_m must be given with direction.rule start-point, and only then "
             f"(rule {config.direction.rule}, start_m {config.direction.start_m})"
+        )
+    line = value("segment.line_valley_length_m")
+    if line and not 2 * working <= line <= MAX_LINE_VALLEY_VOXELS * working:
+        raise InputError(
+            f"segment.line_valley_length_m {line:g} must be 0 (off) or 2-{MAX_LINE_VALLEY_VOXELS} working voxels "
+            f"({2 * working:g}-{MAX_LINE_VALLEY_VOXELS * working:g} m at condition.working_voxel_m {working:g}): a "
+            "shorter line averages nothing, a longer one costs a lookup per point and voxel"
+        )
+    if line and not value("segment.wide_valley_radius_m"):
+        raise InputError(
+            "segment.line_valley_length_m needs segment.wide_valley_radius_m above 0: the valleys found along their "
+            "length are traced with the wide ones (set both to 0 to seek neither)"
         )
     if value("resample.spacing_m") < MIN_SPACING_M:
         raise InputError(

@@ -4,7 +4,11 @@ import pytest
 from tests.conftest import fillet_cloud, rotation_about, v_groove_cloud
 from weldseam.config import PlanConfig
 from weldseam.errors import NoSeamError
-from weldseam.pipeline.run import STAGES, plan_paths
+from weldseam.pipeline.run import STAGES, _line_valleys, plan_paths, run_steps
+from weldseam.pipeline import segment
+from weldseam.pipeline.valley_lines import band_width_m
+from weldseam.synthetic.catalog import draw_case
+from weldseam.synthetic.scenes import FAMILIES, make_scan
 from weldseam.types import Scan
 
 CONFIG = PlanConfig()
@@ -138,3 +142,33 @@ def test_a_t_joint_seen_from_above_is_found_where_the_flange_ends_under_the_web(
     assert np.degrees(np.arccos(path.rotations[inside, :, 2] @ bisector)).max() < 3.0
     assert any("one face of the corner was not seen" in w for w in result.warnings)
     assert np.mean(path.pose_confidence[inside] == 0.7) > 0.9  # each pose says its face was unseen
+
+
+def test_valleys_along_their_length_are_not_sought_near_the_table():
+    """Averaged along their length, the valley depths at the table (its noise far from the camera,
+    the tubes' corners with it) show thousands of valleys on a broad valley scene; none of them is
+    a candidate: nothing within descriptor.radius_m of the support plane is."""
+    scene, scan = draw_case("valley", 0, broad=True)
+    state = run_steps(Scan(points_m=scan.points_m, camera_origin_m=scan.camera_origin_m, source="test"), CONFIG,
+                      last="segment")  # fmt: skip
+    centre, normal = state.support
+    near_table = np.abs((state.working - centre) @ normal) <= CONFIG.descriptor.radius_m
+    selected = _line_valleys(state, CONFIG)
+    assert selected.any() and not selected[near_table].any()
+    state.support = None
+    assert _line_valleys(state, CONFIG)[near_table].sum() > 1000
+
+
+def test_a_band_as_wide_as_an_area_is_no_valley_along_its_length():
+    """On a T-joint's plates the sensor's ripple leaves its troughs side by side: averaged along
+    their length they select areas 19-47 mm wide (valley_lines.band_width_m), no valley's line."""
+    rng = np.random.default_rng(0)
+    scan = make_scan(FAMILIES["fillet_t"](rng), rng)
+    state = run_steps(Scan(points_m=scan.points_m, camera_origin_m=scan.camera_origin_m, source="test"), CONFIG,
+                      last="segment")  # fmt: skip
+    found, _ = segment.cluster_candidates(state.working, _line_valleys(state, CONFIG),
+                                          tolerance_m=CONFIG.segment.cluster_tolerance_m,
+                                          min_length_m=CONFIG.segment.min_seam_length_m)  # fmt: skip
+    widths = [band_width_m(state.working[members], CONFIG.condition.working_voxel_m) for members in found]
+    assert max(widths) > 3 * CONFIG.descriptor.radius_m
+    assert state.line_valleys == []

@@ -7,7 +7,7 @@ from weldseam.pipeline.descriptor import gradient_descriptor, valley_depth
 from weldseam.pipeline.neighbours import centroid_offsets, radius_graph
 from weldseam.pipeline.normals import estimate_normals
 from weldseam.pipeline.segment import (
-    automatic_threshold, band_points, cluster_candidates, covered, dense_selection, noise_floor, wide_valleys,
+    automatic_threshold, band_points, cluster_candidates, covered, dense_selection, noise_floor, uncovered, wide_valleys,
 )
 
 SPACING = 0.0025
@@ -113,6 +113,16 @@ def test_a_wide_valley_is_covered_by_one_fine_crease_along_it_not_by_pieces_besi
     assert not covered(points[wide], trees(crease_aside), tolerance_m=0.006)
     pieces = [crease_on_it[k : k + 10] for k in range(0, len(along), 10)]  # four pieces, each a quarter
     assert not covered(points[wide], trees(*pieces), tolerance_m=0.006)
+
+
+def test_a_cluster_another_pass_found_is_not_sought_again():
+    along = np.arange(0.0, 0.1, 0.0025)
+    line = np.column_stack([along, np.zeros_like(along), np.zeros_like(along)])
+    points = np.vstack([line, line + [0.0, 0.003, 0.0], line + [0.0, 0.05, 0.0]])
+    first, beside, apart = (np.arange(len(along)) + k * len(along) for k in range(3))
+    kept = uncovered(points, [beside, apart], [first], tolerance_m=0.006)
+    assert len(kept) == 1 and np.array_equal(kept[0], apart)
+    assert len(uncovered(points, [beside, apart], [], tolerance_m=0.006)) == 2
 
 
 def test_a_wide_valleys_band_is_merged_into_voxels_a_quarter_of_its_radius(rng):

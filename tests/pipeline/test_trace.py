@@ -161,7 +161,9 @@ def test_a_chain_beside_a_traced_seam_whose_sections_find_only_that_seam_is_give
     half = TracedSeam(on_valley[:40], axes[:40], False, JointKind.FILLET, 1.0)  # 60 % of it still new
     surface = CountingValleySurface()
     (seam,) = trace_chain(beside, axes, {}, surface, TraceConfig(), follow_fits=True, traced=[half], beside_m=0.006)
-    assert len(seam.positions_m) == len(along) and surface.fitted > 100
+    # What the half traced, and beside_m past its end, is not traced again: the seam is the rest.
+    assert np.array_equal(seam.positions_m, on_valley[-len(seam.positions_m):]) and surface.fitted > 100
+    assert abs(seam.positions_m[0, 0] - (along[39] + 0.006)) <= STEP_M / 2
     on_it = Chain(on_valley, False)
     (seam,) = trace_chain(on_it, axes, {}, CountingValleySurface(), TraceConfig(), traced=[traced], beside_m=0.006)
     assert len(seam.positions_m) == len(along), "a chain on its joint is judged by where it lies, before (inside_traced)"

@@ -46,6 +46,7 @@ from weldseam.pipeline import (
     tacks,
     thinning,
     trace,
+    valley_lines,
 )
 from weldseam.pipeline.candidates import Rejection
 from weldseam.pipeline.joints import JointKind
@@ -118,10 +119,12 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
     """The candidates: bands where the descriptor exceeds the automatic threshold (or
     segment.threshold), and, apart from them, the valleys and the ridges where the signed bend
     exceeds its own (a groove's ridge never joins a plate's edge: on a narrow part the descriptor's
-    bands merge), and the lines of thin gaps in a single view's image (gaps; sought as square
+    bands merge), the valleys too shallow for that, over a wide reach or along their length
+    (_line_valleys), and the lines of thin gaps in a single view's image (gaps; sought as square
     butts alone). Clusters too short are recorded as rejected. The table under the part (_support)
-    is found here from the unbent points, before the worker forks (_probe): found after, its 8 MB of
-    temporaries would land on pages shared with the worker, each then copied."""
+    is found here from the unbent points, before the valleys along their length (none lies on it)
+    and before the worker forks (_probe): found after, its 8 MB of temporaries would land on pages
+    shared with the worker, each then copied."""
     state.threshold = c.segment.threshold
     if state.threshold is None:
         state.threshold = segment.crease_threshold(c, c.descriptor.variant)
@@ -135,9 +138,21 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
             found, too_short = _clusters(state, c, segment.dense_selection(graph, side, c.segment.min_density))
             state.creases += found
             short += too_short
-        if c.segment.wide_valley_radius_m:
-            state.wide_valleys, too_short = segment.wide_valley_clusters(state.working, state.working_camera,
-                                                                         state.creases, c.segment)  # fmt: skip
+    if c.support.enabled:
+        state.support = support.find_support_plane(state.working, state.descriptor <= state.threshold,
+                                                   state.working_camera, tolerance_m=c.support.tolerance_m,
+                                                   below_fraction=c.support.below_fraction)  # fmt: skip
+    if c.segment.valleys and c.segment.wide_valley_radius_m:
+        state.wide_valleys, too_short = segment.wide_valley_clusters(state.working, state.working_camera,
+                                                                     state.creases, c.segment)  # fmt: skip
+        short += too_short
+        if c.segment.line_valley_length_m:
+            found, too_short = _clusters(state, c, _line_valleys(state, c))
+            widest = valley_lines.MAX_BAND_WIDTH_RADII * c.descriptor.radius_m
+            found = [members for members in found
+                     if valley_lines.band_width_m(state.working[members], c.condition.working_voxel_m) <= widest]
+            state.line_valleys = segment.uncovered(state.working, found, state.creases + state.wide_valleys,
+                                                   c.segment.cluster_tolerance_m)  # fmt: skip
             short += too_short
     if c.segment.occluded_ends and state.scan.camera_origin_m is not None and state.camera.ndim == 1:
         # One camera: rims past whose end it sees a wall's top; the view buffer is kept for one_face.
@@ -160,11 +175,26 @@ def _segment(state: PlanState, c: PlanConfig) -> None:
     state.short_candidates = [replace(candidates.cluster_candidate(state.working[members]), rejection=Rejection.TOO_SHORT)
                               for members in short]  # fmt: skip
     state.working_tree = cKDTree(state.working, balanced_tree=False, compact_nodes=False)
-    if c.support.enabled:
-        state.support = support.find_support_plane(state.working, state.descriptor <= state.threshold,
-                                                   state.working_camera, tolerance_m=c.support.tolerance_m,
-                                                   below_fraction=c.support.below_fraction)  # fmt: skip
     state.dump("segment", state.candidate_points(), None)
+
+
+def _line_valleys(state: PlanState, c: PlanConfig) -> np.ndarray:
+    """(N,) bool: the working points whose valley depth, averaged along the valley over
+    segment.line_valley_length_m (valley_lines), shows a bend of segment.line_valley_min_crease_deg,
+    but those within descriptor.radius_m of the support plane (its corners with the parts on it,
+    which that depth measures there, are no joints)."""
+    depth = valley_lines.line_valley_depth(state.working, state.normals, state.valley,
+                                           spacing_m=c.condition.working_voxel_m,
+                                           length_m=c.segment.line_valley_length_m)  # fmt: skip
+    threshold = segment.automatic_threshold(
+        spacing_m=c.condition.working_voxel_m, normals_radius_m=c.normals.radius_m,
+        descriptor_radius_m=c.descriptor.radius_m, variant="valley", min_crease_deg=c.segment.line_valley_min_crease_deg,
+    )
+    selected = depth > threshold
+    if state.support is not None:
+        centre, normal = state.support
+        selected &= np.abs((state.working - centre) @ normal) > c.descriptor.radius_m
+    return selected
 
 
 def _clusters(state: PlanState, c: PlanConfig, selected: np.ndarray):
@@ -214,15 +244,18 @@ def _pairing(state: PlanState, c: PlanConfig) -> None:
         state.dump("pairing", midpoints, None)
     state.centre_points += [state.working[members] for members in state.creases]
     state.centre_points += state.gaps
-    state.centre_points += [segment.band_points(state.working[members], c.segment) for members in state.wide_valleys]
+    shallow = state.wide_valleys + state.line_valleys
+    state.centre_points += [segment.band_points(state.working[members], c.segment) for members in shallow]
     state.centre_sources = ([Source()] * (len(state.clusters) + len(state.creases))
                             + [Source(GAP_KINDS)] * len(state.gaps)
-                            + [Source(follow_fits=True)] * len(state.wide_valleys))  # fmt: skip
+                            + [Source(follow_fits=True, rank=1)] * len(state.wide_valleys)
+                            + [Source(follow_fits=True, rank=2)] * len(state.line_valleys))  # fmt: skip
 
 
 def _thinning(state: PlanState, c: PlanConfig) -> None:
-    radii = [c.thinning.radius_m] * (len(state.centre_points) - len(state.wide_valleys))  # all at once: thin_points
-    radii += [c.segment.wide_valley_radius_m / 2] * len(state.wide_valleys)  # half a wide band's width
+    shallow = len(state.wide_valleys) + len(state.line_valleys)
+    radii = [c.thinning.radius_m] * (len(state.centre_points) - shallow)  # all at once: thin_points
+    radii += [c.segment.wide_valley_radius_m / 2] * shallow  # half a wide band's width
     state.centre_points = thinning.thin_points(state.centre_points, radius_m=radii, iterations=c.thinning.iterations)
     for thinned in state.centre_points:
         state.dump("thinning", thinned, None)
@@ -257,11 +290,11 @@ def _probe(state: PlanState, c: PlanConfig) -> None:
 
 
 def _trace(state: PlanState, c: PlanConfig) -> None:
-    """The chains on the seams their probes find first (probe.tracing_order; wide valleys' last), each
+    """The chains on the seams their probes find first (probe.tracing_order), pass by pass (Source.rank), each
     traced; a chain within face_radius / 2 of the opening of a groove traced before is skipped. The
     pieces are then taken in chain order."""
     chains, sources = state.chains, state.chain_sources
-    by_length = sorted(range(len(chains)), key=lambda k: (sources[k].follow_fits,
+    by_length = sorted(range(len(chains)), key=lambda k: (sources[k].rank,
                                                           probe.tracing_order(chains[k], state.probes[k])))
     pieces: dict[int, list[trace.TracedSeam]] = {}
     traced_so_far: list[trace.TracedSeam] = []

@@ -143,9 +143,14 @@ def wide_valley_clusters(
                         noise_factor=params.noise_factor, min_density=params.min_density)  # fmt: skip
     found, too_short = cluster_candidates(points, wide, tolerance_m=params.cluster_tolerance_m,
                                           min_length_m=params.min_seam_length_m)  # fmt: skip
-    crease_trees = [cKDTree(points[crease]) for crease in fine_creases]
-    return [members for members in found
-            if not covered(points[members], crease_trees, params.cluster_tolerance_m)], too_short
+    return uncovered(points, found, fine_creases, params.cluster_tolerance_m), too_short
+
+
+def uncovered(points: np.ndarray, found: list[np.ndarray], known: list[np.ndarray], tolerance_m: float) -> list[np.ndarray]:
+    """The clusters `found` that none of the `known` candidates covers (covered; both as indices
+    into `points` (N, 3)): a crease another pass found is not sought twice."""
+    trees = [cKDTree(points[candidate]) for candidate in known] if found else []
+    return [members for members in found if not covered(points[members], trees, tolerance_m)]
 
 
 def band_points(points: np.ndarray, params: SegmentConfig) -> np.ndarray:

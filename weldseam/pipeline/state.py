@@ -25,12 +25,15 @@ Dump = Callable[[str, np.ndarray, np.ndarray | None], None]
 
 class Source(NamedTuple):
     """How the probe and the trace treat a candidate's chains, by what found it: the joint kinds
-    their sections seek (None: any), and whether the chain may lie a few mm off its joint and is
+    their sections seek (None: any), whether the chain may lie a few mm off its joint and is
     moved onto the seam points its sections find (a wide valley's band, thinned over half its
-    width: trace.on_fits; such chains are traced last)."""
+    width: trace.on_fits), and when its pass's chains are traced: the fine passes' first (0), the
+    wide valleys' after them (1), the valleys found along their length last (2); a chain traced
+    later does not trace again a stretch an earlier one traced."""
 
     kinds: frozenset | None = None
     follow_fits: bool = False
+    rank: int = 0
 
 
 @dataclass
@@ -61,6 +64,7 @@ class PlanState:
     creases: list = field(default_factory=list)
     gaps: list = field(default_factory=list)
     wide_valleys: list = field(default_factory=list)
+    line_valleys: list = field(default_factory=list)
     view: occlusion.ViewBuffer | None = None
     working_tree: object = None
     support: tuple | None = None
@@ -83,8 +87,9 @@ class PlanState:
 
     def candidate_points(self) -> np.ndarray:
         """(C, 3) the points of every candidate segment found: the descriptor's bands, the valleys
-        and ridges, the wide valleys (working points) and the lines of thin gaps (their middles)."""
-        chosen = [*self.clusters, *self.creases, *self.wide_valleys]
+        and ridges, the wide valleys and those along their length (working points) and the lines
+        of thin gaps (their middles)."""
+        chosen = [*self.clusters, *self.creases, *self.wide_valleys, *self.line_valleys]
         parts = ([self.working[np.concatenate(chosen)]] if chosen else []) + list(self.gaps)
         return np.vstack(parts) if parts else np.empty((0, 3))
 

@@ -127,7 +127,8 @@ def trace_chain(
     valley's) may lie a few mm off it; where its sections find the seam off it (on_fits), they are
     taken again across the line they found; its coarse sections count only where they find the
     seam outside the seams `traced` before (within their half-opening + `beside_m`): a chain whose
-    sections find only those adds nothing, and two more passes over it cost most of a trace."""
+    sections find only those adds nothing, and two more passes over it cost most of a trace; nor do
+    its fits there become seam points (a stretch traced once is not traced twice)."""
     travel, axes, lateral = section_frames(chain.points, approx_axes, chain.closed)
     sought = akin({fit.kind for fit in probe_fits.values() if fit.kind is not None}) or None  # none: any
     found = dict(probe_fits)
@@ -170,6 +171,8 @@ def trace_chain(
     # A shallow corner's point is known less well across than a square one's (across_spread).
     max_offset = params.max_offset_m * np.array([fit.geometry.across_spread for fit in fits])
     valid = np.array([fit.kind == joint for fit in fits]) & consistent(positions, axes, max_offset, params.max_turn_deg)
+    if follow_fits:
+        valid &= ~covered(positions, traced, beside_m)
     return [_piece([fits[i] for i in run], closed, joint, confidence)
             for run, closed in _valid_runs(chain.points, valid, chain.closed, params.max_gap_m)]  # fmt: skip
 
