@@ -96,6 +96,7 @@ def test_a_missing_config_file_is_named(tmp_path):
          "segment.line_valley_length_m 0.003 must be 0 (off) or 2-40 working voxels (0.005-0.1 m at "
          "condition.working_voxel_m 0.0025)"),
         ({"segment": {"line_valley_length_m": 0.2}}, "segment.line_valley_length_m 0.2 must be 0 (off) or 2-40"),
+        ({"segment": {"line_valley_min_crease_deg": 0.0}}, "segment.line_valley_min_crease_deg must be above 0"),
         ({"segment": {"wide_valley_radius_m": 0.0}},
          "segment.line_valley_length_m needs segment.wide_valley_radius_m above 0"),
     ],

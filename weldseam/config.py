@@ -393,12 +393,14 @@ def effective_config(config_file: str | Path | None, overrides: dict[str, dict])
     return config
 
 
-# Sizes that divide space into cells or neighbourhoods: zero would mean infinitely many.
+# Sizes that divide space into cells or neighbourhoods: zero would mean infinitely many (and the
+# weakest bend of a valley along its length: zero would take every mean above zero).
 POSITIVE_KEYS = (
     "condition.voxel_m", "condition.working_voxel_m", "merge.icp_voxel_m", "merge.dedup_voxel_m",
     "smooth.radius_m", "normals.radius_m", "descriptor.radius_m", "segment.cluster_tolerance_m",
     "boundary.radius_m", "thinning.radius_m", "grid.leaf_m", "order.link_m", "section.half_width_m",
     "section.slab_m", "joints.face_radius_m", "extend.step_m", "resample.spacing_m",
+    "segment.line_valley_min_crease_deg",
 )
 # Radii of neighbourhoods in the working cloud (points condition.working_voxel_m apart).
 WORKING_RADIUS_KEYS = (

@@ -61,22 +61,27 @@ def test_a_valley_between_tubes_too_shallow_for_both_radii_stands_out_along_its_
 
 
 def test_a_line_is_averaged_only_where_half_its_samples_meet_the_surface():
-    """A valley 10 mm long: a 30 mm line through it meets the surface at 5 of its 13 samples."""
-    u, v = (grid.ravel() for grid in np.meshgrid(np.arange(-0.02, 0.02, SPACING), np.arange(0.0, 0.01, SPACING)))
-    points = np.column_stack([u, v, np.abs(u) * 0.3])
+    """A V along y, 10 mm long (4 rows): a 30 mm line along it meets the surface at 4 of its 13
+    samples, a 5 mm one at 3 of 3 or 2 of 3 and averages the depths it meets."""
+    u, v = (grid.ravel() * SPACING for grid in np.meshgrid(np.arange(-8, 8), np.arange(0, 4)))
+    points = np.column_stack([u, v + np.where(v > 0, 0.2 * SPACING, 0.0), np.abs(u) * 0.3])  # off the voxels' faces
     normals = np.column_stack([-0.3 * np.sign(u), np.zeros_like(u), np.ones_like(u)])
     normals /= np.linalg.norm(normals, axis=1, keepdims=True)
-    depth = np.full(len(points), 0.001)
+    depth = 0.001 * (1.0 + v / SPACING)  # 1, 2, 3, 4 mm by row: which points are met shows
     assert not line_valley_depth(points, normals, depth, spacing_m=SPACING, length_m=0.03).any()
-    assert np.allclose(line_valley_depth(points, normals, depth, spacing_m=SPACING, length_m=0.0075)[u == 0], 0.001)
+    mean = line_valley_depth(points, normals, depth, spacing_m=SPACING, length_m=0.005)
+    rows = np.rint(v[u == 0] / SPACING)
+    assert np.allclose(mean[u == 0], np.select([rows == 0, rows == 3], [0.0015, 0.0035], 0.002 + 0.001 * (rows - 1)))
 
 
-def test_a_plane_without_noise_bends_nowhere_and_has_no_valley():
+def test_a_plane_without_noise_bends_nowhere_and_has_no_valley_in_any_frame():
     u, v = (grid.ravel() for grid in np.meshgrid(np.arange(0.0, 0.05, SPACING), np.arange(0.0, 0.05, SPACING)))
     points = np.column_stack([u, v, np.zeros_like(u)])
     normals = np.tile([0.0, 0.0, 1.0], (len(points), 1))
-    assert not line_valley_depth(points, normals, np.full(len(points), 0.001), spacing_m=SPACING,
-                                 length_m=0.03).any()  # fmt: skip
+    for turn in (np.eye(3), rotation_about([1.0, 2.0, 0.5], 1.0)):
+        assert not line_valley_depth(points @ turn.T, normals @ turn.T, np.full(len(points), 0.001),
+                                     spacing_m=SPACING, length_m=0.03).any()  # fmt: skip
+    assert not line_valley_depth(np.empty((0, 3)), np.empty((0, 3)), np.empty(0), spacing_m=SPACING, length_m=0.03).size
 
 
 def test_a_bands_width_is_its_area_over_its_length():

@@ -186,11 +186,7 @@ def _line_valleys(state: PlanState, c: PlanConfig) -> np.ndarray:
     depth = valley_lines.line_valley_depth(state.working, state.normals, state.valley,
                                            spacing_m=c.condition.working_voxel_m,
                                            length_m=c.segment.line_valley_length_m)  # fmt: skip
-    threshold = segment.automatic_threshold(
-        spacing_m=c.condition.working_voxel_m, normals_radius_m=c.normals.radius_m,
-        descriptor_radius_m=c.descriptor.radius_m, variant="valley", min_crease_deg=c.segment.line_valley_min_crease_deg,
-    )
-    selected = depth > threshold
+    selected = depth > segment.crease_threshold(c, "valley", c.segment.line_valley_min_crease_deg)
     if state.support is not None:
         centre, normal = state.support
         selected &= np.abs((state.working - centre) @ normal) > c.descriptor.radius_m
@@ -255,7 +251,7 @@ def _pairing(state: PlanState, c: PlanConfig) -> None:
 def _thinning(state: PlanState, c: PlanConfig) -> None:
     shallow = len(state.wide_valleys) + len(state.line_valleys)
     radii = [c.thinning.radius_m] * (len(state.centre_points) - shallow)  # all at once: thin_points
-    radii += [c.segment.wide_valley_radius_m / 2] * shallow  # half a wide band's width
+    radii += [c.segment.wide_valley_radius_m / 2] * shallow  # half a wide band's width (and so a line valley's)
     state.centre_points = thinning.thin_points(state.centre_points, radius_m=radii, iterations=c.thinning.iterations)
     for thinned in state.centre_points:
         state.dump("thinning", thinned, None)

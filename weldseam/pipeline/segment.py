@@ -52,11 +52,13 @@ def automatic_threshold(
     return float(np.median(values[on_fold]))
 
 
-def crease_threshold(config: PlanConfig, variant: str) -> float:
-    """automatic_threshold at a run's spacing (the working voxel), radii and min_crease_deg."""
+def crease_threshold(config: PlanConfig, variant: str, min_crease_deg: float | None = None) -> float:
+    """automatic_threshold at a run's spacing (the working voxel) and radii, for `min_crease_deg`
+    (None: segment.min_crease_deg)."""
     return automatic_threshold(
         spacing_m=config.condition.working_voxel_m, normals_radius_m=config.normals.radius_m,
-        descriptor_radius_m=config.descriptor.radius_m, variant=variant, min_crease_deg=config.segment.min_crease_deg,
+        descriptor_radius_m=config.descriptor.radius_m, variant=variant,
+        min_crease_deg=config.segment.min_crease_deg if min_crease_deg is None else min_crease_deg,
     )
 
 
@@ -154,7 +156,8 @@ def uncovered(points: np.ndarray, found: list[np.ndarray], known: list[np.ndarra
 
 
 def band_points(points: np.ndarray, params: SegmentConfig) -> np.ndarray:
-    """A wide valley's band (N, 3) merged into voxels a quarter of params.wide_valley_radius_m wide:
+    """A wide valley's band (N, 3) (or one found along its length: valley_lines) merged into voxels
+    a quarter of params.wide_valley_radius_m wide:
     thinned over half that radius, its working points would each have ~50 neighbours, and its
     centre line is no finer than that anyway."""
     return voxel_centroids(points, params.wide_valley_radius_m / 4)

@@ -28,8 +28,8 @@ class Source(NamedTuple):
     their sections seek (None: any), whether the chain may lie a few mm off its joint and is
     moved onto the seam points its sections find (a wide valley's band, thinned over half its
     width: trace.on_fits), and when its pass's chains are traced: the fine passes' first (0), the
-    wide valleys' after them (1), the valleys found along their length last (2); a chain traced
-    later does not trace again a stretch an earlier one traced."""
+    wide valleys' after them (1), the valleys found along their length last (2); a follow-fits
+    chain adds no seam points on a stretch traced before it."""
 
     kinds: frozenset | None = None
     follow_fits: bool = False
