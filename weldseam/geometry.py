@@ -75,6 +75,12 @@ def even_indices(length: int, count: int) -> np.ndarray:
     return np.unique(np.linspace(0, length - 1, min(count, length)).round().astype(int))
 
 
+def principal_extent(points: np.ndarray) -> float:
+    """Extent (m) of points (K, 3) along their principal axis (their largest spread)."""
+    centred = points - points.mean(axis=0)
+    return float(np.ptp(centred @ np.linalg.svd(centred, full_matrices=False)[2][0]))
+
+
 def polyline_length(points: np.ndarray, closed: bool = False) -> float:
     """Length (m) of a polyline, including the closing segment of a loop."""
     return float(arc_lengths(points, closed)[-1]) if len(points) else 0.0

@@ -8,7 +8,7 @@ from enum import Enum
 
 import numpy as np
 
-from weldseam.geometry import polyline_length
+from weldseam.geometry import polyline_length, principal_extent
 
 
 class Rejection(str, Enum):
@@ -60,10 +60,8 @@ def candidate_of(points: np.ndarray, closed: bool = False) -> Candidate:
 
 def cluster_candidate(points: np.ndarray) -> Candidate:
     """A Candidate for a cluster of working points: its mean and its extent along its principal axis."""
-    centred = points - points.mean(axis=0)
-    axis = np.linalg.svd(centred, full_matrices=False)[2][0]
     centre = points.mean(axis=0)
-    return Candidate(tuple(round(float(v), 6) for v in centre), float(np.ptp(centred @ axis)))
+    return Candidate(tuple(round(float(v), 6) for v in centre), principal_extent(points))
 
 
 def commonest_reasons(candidates: list[Candidate], count: int = 3) -> str:

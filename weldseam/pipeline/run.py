@@ -244,8 +244,8 @@ def _pairing(state: PlanState, c: PlanConfig) -> None:
     state.centre_points += [segment.band_points(state.working[members], c.segment) for members in shallow]
     state.centre_sources = ([Source()] * (len(state.clusters) + len(state.creases))
                             + [Source(GAP_KINDS)] * len(state.gaps)
-                            + [Source(follow_fits=True, rank=1)] * len(state.wide_valleys)
-                            + [Source(follow_fits=True, rank=2)] * len(state.line_valleys))  # fmt: skip
+                            + [Source(rank=1)] * len(state.wide_valleys)
+                            + [Source(rank=2)] * len(state.line_valleys))  # fmt: skip
 
 
 def _thinning(state: PlanState, c: PlanConfig) -> None:

@@ -10,6 +10,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from weldseam.config import PlanConfig, SegmentConfig
+from weldseam.geometry import principal_extent
 from weldseam.pipeline.descriptor import gradient_descriptor, valley_depth
 from weldseam.pipeline.grid import voxel_centroids, voxel_grid
 from weldseam.pipeline.neighbours import centroid_offsets, neighbour_mean, radius_graph
@@ -95,8 +96,7 @@ def cluster_candidates(
     low, high = (reduce.reduceat(points[grouped], starts, axis=0) for reduce in (np.minimum, np.maximum))
     clusters, short = [], []
     for members in itertools.compress(groups, np.linalg.norm(high - low, axis=1) >= tolerance_m):
-        centred = points[members] - points[members].mean(axis=0)
-        extent = np.ptp(centred @ np.linalg.svd(centred, full_matrices=False)[2][0])
+        extent = principal_extent(points[members])
         if extent >= min_length_m:
             clusters.append(members)
         elif extent >= tolerance_m:

@@ -25,15 +25,19 @@ Dump = Callable[[str, np.ndarray, np.ndarray | None], None]
 
 class Source(NamedTuple):
     """How the probe and the trace treat a candidate's chains, by what found it: the joint kinds
-    their sections seek (None: any), whether the chain may lie a few mm off its joint and is
-    moved onto the seam points its sections find (a wide valley's band, thinned over half its
-    width: trace.on_fits), and when its pass's chains are traced: the fine passes' first (0), the
-    wide valleys' after them (1), the valleys found along their length last (2); a follow-fits
-    chain adds no seam points on a stretch traced before it."""
+    their sections seek (None: any), and when its pass's chains are traced: the fine passes'
+    first (rank 0), the wide valleys' after them (1), the valleys found along their length last
+    (2)."""
 
     kinds: frozenset | None = None
-    follow_fits: bool = False
     rank: int = 0
+
+    @property
+    def follow_fits(self) -> bool:
+        """Whether the chain may lie a few mm off its joint and is moved onto the seam points its
+        sections find (a shallow valley's band, thinned over half its width: trace.on_fits), adding
+        no seam points on a stretch traced before it: the shallow valleys' (rank above 0)."""
+        return self.rank > 0
 
 
 @dataclass

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from weldseam.geometry import column_bounds, unit
+from weldseam.geometry import column_bounds, principal_extent, unit
 from weldseam.pipeline.grid import voxel_grid
 from weldseam.pipeline.neighbours import extreme_eigenvectors, neighbour_covariance, radius_graph
 
@@ -95,6 +95,4 @@ def valley_directions(points: np.ndarray, normals: np.ndarray) -> np.ndarray:
 def band_width_m(points: np.ndarray, spacing_m: float) -> float:
     """Mean width (m) of a band of points (K, 3), one per `spacing_m` voxel: its area K spacing^2
     over its length (its extent along its principal axis)."""
-    centred = points - points.mean(axis=0)
-    length = np.ptp(centred @ np.linalg.svd(centred, full_matrices=False)[2][0])
-    return len(points) * spacing_m**2 / max(length, spacing_m)
+    return len(points) * spacing_m**2 / max(principal_extent(points), spacing_m)
