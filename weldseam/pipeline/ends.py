@@ -28,6 +28,14 @@ CURVE_FLOOR_M = 0.001
 # Near the anchor the floor is widened by this many times the rms scatter of the fits the curve
 # was fitted to (end_fit): the anchor is one of them, and the curve leans with them.
 CURVE_SIGMAS = 2.0
+# The curve fitted to a tight ring's end bends too little: a quadratic over TANGENT_BASELINE_M of a
+# ring of 30 mm bends at 35 mm, of 25 mm or less at the 30 mm clamp (MIN_BEND_RADIUS_M), of 40 mm
+# or more within 4 mm of it. So a curve bent at RING_FIT_RADIUS_M or tighter may be a ring down
+# to MIN_RING_RADIUS_M (round a pipe of DN25, 33.7 mm across) which runs inside it: a saddle on a
+# 26 mm branch pipe fits at 31-34 mm on real fits, its seam 2.3-4.3 mm inside the curve 15-25 mm
+# on. A flatter curve follows its seam, and a shadow's edge leaves a ring straight, outside it.
+RING_FIT_RADIUS_M = 0.035
+MIN_RING_RADIUS_M = 0.017
 # Where the camera sees this much past the seam line of a joint whose seam point lies on the part's
 # surfaces (joints.ON_SURFACE), the part is not there: their own faces, with 1-2 mm of ripple and
 # depth steps, lie within -5..+1.6 mm of it along the line of sight over the corner ends of seeds
@@ -138,15 +146,41 @@ def seam_line(points: np.ndarray) -> SeamLine | None:
 
 def on_curve(anchor, direction, bend, arc_m: float, point, axis, scatter_m: float = 0.0) -> bool:
     """Whether `point` (3,), `arc_m` on along a seam from `anchor` (3,), lies within
-    max(CURVE_FLOOR_M + CURVE_SIGMAS x `scatter_m`, ONE_FACE_DRIFT x arc) of the curve there
+    b = max(CURVE_FLOOR_M + CURVE_SIGMAS x `scatter_m`, ONE_FACE_DRIFT x arc) of the curve there
     (end_curve's `direction` and `bend` at the anchor: ahead), sideways of the torch `axis`;
     `scatter_m`: the rms distance of the points the curve was fitted to from it (end_fit).
     The anchor is one of those points, and near it the curve is as uncertain as they scatter (the
     last full fits at a saddle's flank scatter 0.2-0.5 mm, the curve through them misses the
-    seam by 1-2 mm over the next 4-8 mm); farther on, the drift allowance covers that."""
+    seam by 1-2 mm over the next 4-8 mm); farther on, the drift allowance covers that. Where the
+    curve bends as tightly as a ring's does, the point may also lie farther inside it, as far as
+    a tighter ring would (_inside_tighter_ring)."""
     predicted, travel = ahead(anchor, direction, bend, arc_m)
     _, sideways = offsets(point, predicted, travel, axis)
-    return sideways <= max(CURVE_FLOOR_M + CURVE_SIGMAS * scatter_m, ONE_FACE_DRIFT * arc_m)
+    band = max(CURVE_FLOOR_M + CURVE_SIGMAS * scatter_m, ONE_FACE_DRIFT * arc_m)
+    if sideways <= band:
+        return True
+    return _inside_tighter_ring(predicted, travel, axis, bend, arc_m, point, band)
+
+
+def _inside_tighter_ring(predicted, travel, axis, bend, arc_m: float, point, band_m: float) -> bool:
+    """Whether `point` lies off the curve's `predicted` point (its `travel` there) toward the inside
+    of its `bend` by at most band_m + arc^2 / 2 x (1 / MIN_RING_RADIUS_M - |bend|), and within
+    band_m of it in every other direction across the torch `axis` (along the travel too: a ring's
+    fits keep pace with its curve); only where the curve bends at RING_FIT_RADIUS_M or tighter."""
+    size = float(np.linalg.norm(bend))
+    if size < 1.0 / RING_FIT_RADIUS_M:
+        return False
+    inside = bend - (bend @ travel) * travel
+    axis = unit(axis - (axis @ travel) * travel)
+    inside -= (inside @ axis) * axis
+    if not inside.any():
+        return False
+    inside = unit(inside)
+    offset = point - predicted
+    offset -= (offset @ axis) * axis
+    inward = float(offset @ inside)
+    lag = 0.5 * arc_m**2 * (1.0 / MIN_RING_RADIUS_M - size)
+    return -band_m <= inward <= band_m + lag and float(np.linalg.norm(offset - inward * inside)) <= band_m
 
 
 # What a full fit is not: a corner with one face unseen, or an outline that misses the points.
