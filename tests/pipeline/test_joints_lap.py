@@ -135,3 +135,21 @@ def test_a_groove_beside_a_step_is_no_lap(rng):
     groove = (u > 0.006) & (u < 0.012)
     w[groove] -= 0.003 * (1.0 - np.abs(u[groove] - 0.009) / 0.003)
     assert isinstance(lap.fit(SortedProfile.of(u, w, PARAMS)), NoFit)
+
+
+@pytest.mark.parametrize("top_side", [1, -1])
+def test_a_lower_surface_seen_empty_short_of_the_step_is_two_parts_apart(rng, top_side):
+    # The bottom plate ends 8 mm short of a 3 mm step, the edge face unseen: a fixture's face
+    # standing proud beside a block's. Seen from over the bottom plate (the camera would see the
+    # edge face and the plate up to it) no lap; seen from over the top plate at 65 degrees, the
+    # edge hides 6.4 mm of the bottom plate and the lap stands; so it does without a single camera.
+    u, w, corner, axis = lap_profile(rng, height=0.003, edge=0.002 * top_side, top_side=top_side, face_seen=False,
+                                     shadow_m=0.008)  # fmt: skip
+    over_bottom = (-top_side * np.sin(np.radians(30)), np.cos(np.radians(30)))
+    over_top = (top_side * np.sin(np.radians(65)), np.cos(np.radians(65)))
+    refused = lap.fit(SortedProfile.of(u, w, PARAMS, toward=over_bottom))
+    assert isinstance(refused, NoFit) and "two parts apart" in refused.reason
+    for toward in (over_top, None):
+        fit = fit_profile(u, w, PARAMS, toward=toward)
+        assert fit.kind == LAP
+        assert abs(fit.u - corner[0]) < 0.001

@@ -6,6 +6,7 @@ from weldseam.config import PlanConfig
 from weldseam.geometry import unit
 from weldseam.pipeline.condition import condition_points
 from weldseam.pipeline.joints import JointKind
+from weldseam.pipeline.occlusion import ViewBuffer
 from weldseam.pipeline.section import FineSurface, Profile, section_params
 from weldseam.synthetic.scenes import FAMILIES, make_scan
 
@@ -96,3 +97,20 @@ def test_a_section_shows_the_image_openings_near_its_plane():
     openings = surface.profile(np.zeros(3), travel, axis, lateral).openings_u
     assert len(openings) == 7 and np.allclose(openings, 0.002 * (lateral @ [0.0, 1.0, 0.0]))
     assert len(surface_of(points).profile(np.zeros(3), travel, axis, lateral).openings_u) == 0
+
+
+def test_the_single_cameras_direction_reaches_the_models():
+    """Two level faces stepped 3 mm, the lower one ending 8 mm short of the step's foot (a fixture's
+    face proud beside a block's): a lap with no camera to say otherwise; seen by a camera over the
+    lower face, which would have seen that stretch, two parts apart (lap.SEEN_GAP_M)."""
+    rng = np.random.default_rng(3)
+    xy = rng.uniform(-0.03, 0.03, (12000, 2))
+    upper, lower = xy[:, 1] > 0.002, xy[:, 1] < -0.006
+    points = np.column_stack([xy, np.where(upper, 0.003, 0.0)])[upper | lower]
+    points[:, 2] += rng.normal(0.0, 0.0002, len(points))
+    travel, axis = np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.0, -1.0])
+    lateral = np.cross(travel, axis)
+    assert surface_of(points).fit(np.zeros(3), travel, axis, {JointKind.LAP}).kind == JointKind.LAP
+    camera = np.array([0.0, -0.25, 0.4])  # over the lower face
+    seen = FineSurface(points, cKDTree(points), section_params(PlanConfig()), ViewBuffer.build(points, camera, 0.001))
+    assert seen.fit(np.zeros(3), travel, axis, {JointKind.LAP}).kind is None

@@ -203,18 +203,28 @@ class FineSurface:
         """fit_profile of a section's points, in 3D; where no model fits, a fillet, lap or outside
         corner sought in the window half as wide (_narrow), then, with a single camera, a corner of
         a sought kind with one face unseen (_one_face)."""
-        found = fit_profile(profile.u, profile.w, self.params.joints, kinds, profile.openings_u)
+        toward = self._toward(profile)
+        found = fit_profile(profile.u, profile.w, self.params.joints, kinds, profile.openings_u, toward)
         if isinstance(found, ProfileFit):
             return profile.to_3d(found)
-        narrow = self._narrow(profile, kinds)
+        narrow = self._narrow(profile, kinds, toward)
         if narrow is not None:
             return profile.to_3d(narrow)
-        corner = self._one_face(profile, kinds) if self.view is not None else None
+        corner = self._one_face(profile, kinds, toward) if toward is not None else None
         if corner is not None:
             return profile.to_3d(corner)
         return profile.to_3d(None, reason=found.reason)
 
-    def _narrow(self, profile: Profile, kinds: Collection[JointKind] | None) -> ProfileFit | None:
+    def _toward(self, profile: Profile) -> tuple[float, float] | None:
+        """The (u, w) unit direction from the section's centre toward the single camera, in the
+        section's plane (None without one)."""
+        if self.view is None:
+            return None
+        toward = unit(self.view.camera_m - profile.centre)
+        return float(toward @ profile.lateral), float(-(toward @ profile.axis))
+
+    def _narrow(self, profile: Profile, kinds: Collection[JointKind] | None,
+                toward: tuple[float, float] | None) -> ProfileFit | None:
         """The fit of the sought `kinds` of NARROW_KINDS in the window NARROW_SHARE as wide (None
         when none is sought, or none fits there): another part's surfaces within the window (a
         clamp, a flange's far part, the web of a joint nearby) spoil a face's line, and a corner's
@@ -225,16 +235,16 @@ class FineSurface:
             return None
         reach = NARROW_SHARE * self.params.half_width_m
         near = (np.abs(profile.u) <= reach) & (np.abs(profile.w) <= reach)
-        found = fit_profile(profile.u[near], profile.w[near], self.params.joints, sought)
+        found = fit_profile(profile.u[near], profile.w[near], self.params.joints, sought, toward=toward)
         return found if isinstance(found, ProfileFit) else None
 
-    def _one_face(self, profile: Profile, kinds: Collection[JointKind] | None) -> ProfileFit | None:
+    def _one_face(self, profile: Profile, kinds: Collection[JointKind] | None,
+                  toward_uw: tuple[float, float]) -> ProfileFit | None:
         """A corner of the sought `kinds` with one face unseen: an inside corner (one_face), else an
-        outside corner (one_face_ridge); None where neither is sought or fits."""
-        toward = unit(self.view.camera_m - profile.centre)
+        outside corner (one_face_ridge); None where neither is sought or fits. `toward_uw`: the
+        direction to the camera (_toward)."""
         order = np.argsort(profile.u, kind="stable")
         u, w = profile.u[order], profile.w[order]
-        toward_uw = (float(toward @ profile.lateral), float(-(toward @ profile.axis)))
         corner = None
         if kinds is None or JointKind.FILLET in kinds:
             corner = one_face_corner(u, w, toward_uw, lambda u, w, along=0.0: self.sight(profile, u, w, along),

@@ -49,11 +49,12 @@ ON_SURFACE = frozenset({JointKind.FILLET, JointKind.LAP})
 
 def fit_profile(
     u: np.ndarray, w: np.ndarray, params: JointsConfig, kinds: Collection[JointKind] | None = None,
-    openings_u: np.ndarray = NO_OPENINGS,
+    openings_u: np.ndarray = NO_OPENINGS, toward: tuple[float, float] | None = None,
 ) -> ProfileFit | NoFit:
     """The joint in one profile (u lateral, w height out of the work, m), or NoFit with every
     model's reason; `kinds`: only these models are tried (None: all); `openings_u`: where the
-    sensor's image shows an opening in the section (SortedProfile). Of the models that fit, the
+    sensor's image shows an opening in the section, `toward`: the direction to the single camera
+    (SortedProfile). Of the models that fit, the
     one whose outline lies closest to the profile's points around its seam (outline_residual,
     within face_radius_m + half its opening) is the joint, its residual_m that distance; on a tie,
     the first in MODELS. A fit of a kind that SPECIALISES the closest one's kind, within
@@ -61,7 +62,7 @@ def fit_profile(
     square butt fit against a V-groove or bevel that measured no flank (see SQUARE_OPENING)."""
     if len(u) < MIN_PROFILE_POINTS:
         return NoFit("too few points in the section")
-    profile = SortedProfile.of(u, w, params, openings_u)
+    profile = SortedProfile.of(u, w, params, openings_u, toward)
     u, w = profile.u, profile.w
     reasons, fits = [], []
     for model in MODELS:

@@ -10,6 +10,10 @@ the middle of the two ends); the edge face is square to the plates, so the corne
 The torch axis aims into the corner at joints.lap_torch_split_deg from the bottom plate:
 axis = -(cos(split) e + sin(split) n), e the edge face's outward normal (along the plates, toward
 the bottom plate's open side), n the bottom plate's normal; 45 degrees is the bisector.
+The bottom plate runs on under the top plate: seen by a single camera, it may end short of the
+edge only where the edge hides it (its shadow), and SEEN_GAP_M more; a longer stretch the camera
+would have seen, empty, lies between two parts' faces stepped beside each other (a fixture's face
+proud beside a block's), which is no lap.
 """
 
 from __future__ import annotations
@@ -52,6 +56,11 @@ MAX_SURFACE_SPACING_M = 0.002
 # The bottom plate's surface ending this far short of the top plate's edge is shadowed there:
 # the edge is where the top plate ends, not the middle of the gap.
 SHADOW_GAP_M = 0.0015
+# The bottom plate runs on under the top plate: with a single camera, it may end short of the top
+# plate's edge only within the shadow the edge casts (_shadow), and this much more. A longer empty
+# stretch the camera would have seen is a gap between two parts' faces, stepped (a fixture's face
+# beside a block's, 2-3 mm proud: 7.6-9 mm seen empty, where laps of seeds 0-5 end 0-0.8 mm short).
+SEEN_GAP_M = 0.003
 # The fewest points a surface is fitted to.
 MIN_SIDE_POINTS = 5
 # A plate with more than this share of its points near the step below its line has a groove
@@ -107,15 +116,18 @@ def fit(profile: SortedProfile) -> ProfileFit | NoFit:
     if min(bottom_reach, top_reach) < MIN_PLATE_M:
         return NoFit("less than 5 mm of a plate's surface beside the step")
     gap = side * (top_end - bottom_end)
+    # Back to the section frame: (s, t) = s along + t normal.
+    plates_along = (along + plates.slope * normal) / np.hypot(1.0, plates.slope)
+    plates_normal = np.array([-plates_along[1], plates_along[0]])
+    toward = profile.toward
+    if toward is not None and gap > _shadow(height, side, plates_along, plates_normal, toward) + SEEN_GAP_M:
+        return NoFit("the lower surface stops short of the step where the camera would see it: two parts apart")
     edge_s = top_end if gap > SHADOW_GAP_M else (top_end + bottom_end) / 2
     top_y0 = plates.right_y0 if side > 0 else plates.left_y0
     depth = max(3 * plates.sigma, SURFACE_BAND_M)
     if _dips(bottom, bottom_y0, plates.slope, depth, (edge_s - side * LONG_SURFACE_M, edge_s)) or \
             _dips(top, top_y0, plates.slope, depth, (edge_s + side * SHADOW_GAP_M, edge_s + side * LONG_SURFACE_M)):
         return NoFit("a depression in a plate beside the step (a groove)")
-    # Back to the section frame: (s, t) = s along + t normal.
-    plates_along = (along + plates.slope * normal) / np.hypot(1.0, plates.slope)
-    plates_normal = np.array([-plates_along[1], plates_along[0]])
     corner = edge_s * along + (bottom_y0 + plates.slope * edge_s) * normal
     top_edge = corner + height * plates_normal
     outward = -side * plates_along  # the edge face's normal, toward the bottom plate's open side
@@ -127,6 +139,15 @@ def fit(profile: SortedProfile) -> ProfileFit | NoFit:
     geometry = JointGeometry(depth_m=float(height), legs_m=(bottom_reach, top_reach))
     return ProfileFit(KIND, float(corner[0]), float(corner[1]), float(axis[0]), float(axis[1]), float(plates.sigma),
                       geometry, tuple((float(a), float(b)) for a, b in outline))  # fmt: skip
+
+
+def _shadow(height: float, side: int, plates_along: np.ndarray, plates_normal: np.ndarray, toward) -> float:
+    """How far (m) the top plate's edge, `height` over the bottom plate, hides the bottom plate
+    from the camera (`toward`: the (u, w) unit direction to it): height x tan of the line of sight
+    from the plates' normal, where the camera lies over the top plate's side (`side` along
+    `plates_along`); none where it lies over the bottom plate's (it sees the edge face)."""
+    over, up = float(np.dot(toward, plates_along)) * side, float(np.dot(toward, plates_normal))
+    return height * over / up if over > 0 and up > 0 else 0.0
 
 
 def _dips(surface, y0: float, slope: float, depth: float, stretch: tuple[float, float]) -> bool:

@@ -41,22 +41,25 @@ class PlateSurface(NamedTuple):
 @dataclass(frozen=True, eq=False)
 class SortedProfile:
     """One section's points, u (N,) lateral and ascending, w (N,) height out of the work (m), with
-    the joint models' parameters, and the u (m) of the openings the sensor's image shows across
-    the section (a square butt's gap returning no pixels: gaps.gap_midpoints; none known: empty);
+    the joint models' parameters, the u (m) of the openings the sensor's image shows across
+    the section (a square butt's gap returning no pixels: gaps.gap_midpoints; none known: empty)
+    and the unit (u, w) direction toward the single camera that saw it (None: no single camera);
     every model of one section reads the same value."""
 
     u: np.ndarray
     w: np.ndarray
     params: JointsConfig
     openings_u: np.ndarray = field(default_factory=lambda: NO_OPENINGS)
+    toward: tuple[float, float] | None = None
 
     @classmethod
     def of(
-        cls, u: np.ndarray, w: np.ndarray, params: JointsConfig, openings_u: np.ndarray = NO_OPENINGS
+        cls, u: np.ndarray, w: np.ndarray, params: JointsConfig, openings_u: np.ndarray = NO_OPENINGS,
+        toward: tuple[float, float] | None = None,
     ) -> SortedProfile:
         """The profile of points (u, w) in any order (a stable sort by u)."""
         order = np.argsort(u, kind="stable")
-        return cls(u[order], w[order], params, openings_u)
+        return cls(u[order], w[order], params, openings_u, toward)
 
     @cached_property
     def surface(self) -> PlateSurface | NoFit:
