@@ -114,16 +114,16 @@ def carried_fit(surface: FineSurface, centre, travel, axis, template: CornerTemp
     its ruling in `template` (carried_corner); no fit without a single camera."""
     axis, lateral = section_frame(travel, axis)
     profile = surface.profile(centre, travel, axis, lateral)
-    if surface.view is None:
+    toward = surface.toward(profile)
+    if toward is None:
         return profile.to_3d(None, reason="no single camera to tell an unseen face from a dropout")
     faces = {}
     for side, ruling in ((-1, template.left), (1, template.right)):
         across = ruling - (ruling @ travel) * travel
         if np.linalg.norm(across) >= MIN_ACROSS:
             faces[side] = unit(np.array([across @ lateral, -(across @ axis)]))
-    toward = unit(surface.view.camera_m - centre)
     order = np.argsort(profile.u, kind="stable")
-    found = carried_corner(profile.u[order], profile.w[order], faces, np.array([toward @ lateral, -(toward @ axis)]),
+    found = carried_corner(profile.u[order], profile.w[order], faces, np.array(toward),
                            surface.params.joints, surface.params.half_width_m)  # fmt: skip
     if found is None:
         return profile.to_3d(None, reason="no face ends where the carried face would meet it")

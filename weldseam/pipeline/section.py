@@ -203,7 +203,7 @@ class FineSurface:
         """fit_profile of a section's points, in 3D; where no model fits, a fillet, lap or outside
         corner sought in the window half as wide (_narrow), then, with a single camera, a corner of
         a sought kind with one face unseen (_one_face)."""
-        toward = self._toward(profile)
+        toward = self.toward(profile)
         found = fit_profile(profile.u, profile.w, self.params.joints, kinds, profile.openings_u, toward)
         if isinstance(found, ProfileFit):
             return profile.to_3d(found)
@@ -215,7 +215,7 @@ class FineSurface:
             return profile.to_3d(corner)
         return profile.to_3d(None, reason=found.reason)
 
-    def _toward(self, profile: Profile) -> tuple[float, float] | None:
+    def toward(self, profile: Profile) -> tuple[float, float] | None:
         """The (u, w) unit direction from the section's centre toward the single camera, in the
         section's plane (None without one)."""
         if self.view is None:
@@ -242,7 +242,7 @@ class FineSurface:
                   toward_uw: tuple[float, float]) -> ProfileFit | None:
         """A corner of the sought `kinds` with one face unseen: an inside corner (one_face), else an
         outside corner (one_face_ridge); None where neither is sought or fits. `toward_uw`: the
-        direction to the camera (_toward)."""
+        direction to the camera (toward)."""
         order = np.argsort(profile.u, kind="stable")
         u, w = profile.u[order], profile.w[order]
         corner = None
