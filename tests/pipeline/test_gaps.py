@@ -6,6 +6,7 @@ import pytest
 from weldseam.config import PlanConfig
 from weldseam.pipeline.gaps import gap_midpoints, image_directions, sensor_grid
 from weldseam.pipeline.run import plan_paths
+from weldseam.pipeline.segment import cluster_candidates
 from weldseam.types import Scan
 
 FOCAL_PX = 600.0
@@ -22,11 +23,12 @@ def look_at(camera, target, roll_rad):
     return np.stack([c * x + s * y, -s * x + c * y, z])
 
 
-def render_plates(camera, roll_rad, gap_m, rng, size_px=(480, 640), noise_m=0.0005, table_m=None):
+def render_plates(camera, roll_rad, gap_m, rng, size_px=(480, 640), noise_m=0.0005, table_m=None, floor_m=None):
     """A pinhole sensor's points of two plates in z = 0 (|y| < 0.1, |x| < 0.08) with an opening
     |x - 0.01| < gap_m / 2 between them that returns nothing (a gap too narrow for a stereo
-    match), depth noise along the rays; where `table_m` is given, a table that far below them
-    (|x|, |y| < 0.2) seen around them."""
+    match), or where `floor_m` is given, the floor that far below seen through it; depth noise
+    along the rays; where `table_m` is given, a table that far below them (|x|, |y| < 0.2) seen
+    around them."""
     frame = look_at(camera, np.zeros(3), roll_rad)
     rows, cols = np.mgrid[0:size_px[0], 0:size_px[1]]
     rays = np.column_stack([(cols.ravel() - size_px[1] / 2) / FOCAL_PX, (rows.ravel() - size_px[0] / 2) / FOCAL_PX,
@@ -34,6 +36,11 @@ def render_plates(camera, roll_rad, gap_m, rng, size_px=(480, 640), noise_m=0.00
     hits = camera - (camera[2] / rays[:, 2])[:, None] * rays
     plates = (np.abs(hits[:, 0]) < 0.08) & (np.abs(hits[:, 1]) < 0.1)
     seen = plates & (np.abs(hits[:, 0] - 0.01) >= gap_m / 2)
+    if floor_m is not None:
+        through = camera - ((camera[2] + floor_m) / rays[:, 2])[:, None] * rays
+        opening = plates & ~seen & (np.abs(through[:, 0] - 0.01) < gap_m / 2)
+        hits[opening] = through[opening]
+        seen |= opening
     if table_m is not None:
         below = camera - ((camera[2] + table_m) / rays[:, 2])[:, None] * rays
         table = ~plates & (np.abs(below[:, 0]) < 0.2) & (np.abs(below[:, 1]) < 0.2)
@@ -82,6 +89,34 @@ def test_the_middles_of_a_thin_gap_lie_in_it_along_its_length(roll_deg, gap_m):
     assert along[0] < -0.09 and along[-1] > 0.09 and np.diff(along).max() < 0.005
 
 
+@pytest.mark.parametrize("floor_m", [0.006, 0.05])
+def test_an_opening_that_shows_the_floor_below_has_its_middles_too(floor_m):
+    """Seen from straight above 0.45 m away, a 2.5 mm opening shows the floor 6 or 50 mm below
+    (plates on a table, plates on a mount) through its 3-4 pixels: no pixel is missing, yet the
+    points behind the plates' surface make the same crossings, middles along its length."""
+    camera = np.array([0.01, -0.02, 0.45])
+    points = render_plates(camera, np.radians(20.0), 0.0025, np.random.default_rng(4), floor_m=floor_m)
+    middles = gap_midpoints(points, camera, max_width_m=0.004)
+    in_gap = (np.abs(middles[:, 0] - 0.01) <= 0.0025 / 2 + 0.001) & (np.abs(middles[:, 2]) < 0.001)
+    assert np.count_nonzero(in_gap) >= 0.9 * len(middles)
+    along = np.sort(middles[in_gap, 1])
+    assert along[0] < -0.09 and along[-1] > 0.09 and np.diff(along).max() < 0.005
+
+
+@pytest.mark.parametrize("table_m", [0.004, 0.010])
+def test_a_plate_edge_above_the_table_makes_no_line_of_middles(table_m):
+    """The table 4 or 10 mm below the plates' outer edges lies behind them as a gap's floor does,
+    but on one side only: a step down joins no two points of one surface. What noise lets through
+    is scattered: no line of middles as long as a seam, which is what the candidates are."""
+    camera = np.array([0.0, -0.28, 0.47])
+    points = render_plates(camera, np.radians(25.0), 0.0, np.random.default_rng(6), table_m=table_m)
+    middles = gap_midpoints(points, camera, max_width_m=0.004)
+    config = PlanConfig().segment
+    lines, _ = cluster_candidates(middles, np.ones(len(middles), bool), tolerance_m=config.cluster_tolerance_m,
+                                  min_length_m=config.min_seam_length_m)
+    assert len(middles) < 30 and not lines
+
+
 def test_a_plate_without_an_opening_has_no_line_of_middles():
     camera = np.array([0.0, -0.28, 0.47])
     points = render_plates(camera, np.radians(25.0), 0.0, np.random.default_rng(3))
@@ -103,6 +138,20 @@ def test_a_square_butt_seen_only_as_missing_pixels_is_planned(gap_m, roll_deg, c
     assert path.positions_m[:, 1].min() < -0.095 and path.positions_m[:, 1].max() > 0.095
     without = replace(PlanConfig(), segment=replace(PlanConfig().segment, gaps=False))
     assert not plan_paths(scan, without, allow_empty=True).paths
+
+
+def test_a_square_butt_on_a_mount_showing_the_floor_through_its_gap_is_planned():
+    """Two plates on a mount 50 mm above the table, seen from nearly straight above 0.6 m away:
+    every pixel of their 2.5 mm opening returns the table far below, none is missing, and nothing
+    else finds it (the code before the points behind were counted planned nothing here). The path
+    runs its length within 0.5 mm of it, a square butt."""
+    camera = np.array([0.03, -0.08, 0.6])
+    points = render_plates(camera, np.radians(20.0), 0.0025, np.random.default_rng(7), table_m=0.05, floor_m=0.05)
+    scan = Scan(points_m=points, camera_origin_m=camera, source="mounted plates")
+    (path,) = plan_paths(scan, PlanConfig(), allow_empty=True).paths
+    assert path.joint == "square_butt"
+    assert np.abs(path.positions_m[:, 0] - 0.01).max() < 0.0005 and np.abs(path.positions_m[:, 2]).max() < 0.0005
+    assert path.positions_m[:, 1].min() < -0.095 and path.positions_m[:, 1].max() > 0.095
 
 
 def test_directions_jittered_across_bin_edges_make_no_gaps():

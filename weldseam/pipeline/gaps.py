@@ -2,12 +2,18 @@
 
 A square butt's gap (0.5-4 mm) between two coplanar plates is narrower than a working voxel and
 bends nothing: no descriptor or valley sees it. The sensor does: the pixels looking into the gap
-often return nothing (a stereo match fails in so narrow a slot), a line of missing pixels between
-two surfaces that carry on at one level. (Where they return the floor seen through the gap, the
-valleys find it.) Binned by direction at half the sensor's angular pitch, in the orientation of
-its pixel grid (sensor_grid), a single view's scan is that image again: a run of at least
-MIN_EMPTY_BINS empty bins between two points of a row or a column, the points within
-`max_width_m` (plus a pixel's footprint each) of each other, crosses such a gap, and the
+return nothing (a stereo match fails in so narrow a slot) or what lies behind the plates (the
+floor through the gap, the table or a fixture far below a mounted pair, the gap's far wall seen
+obliquely): a line of pixels, missing or deeper, between two surfaces that carry on at one level.
+Binned by direction at half the sensor's angular pitch, in the orientation of its pixel grid
+(sensor_grid), a single view's scan is that image again. Along a row or a column, a point lies
+behind when its range exceeds the straight line between the points a widest gap's width before
+and after it by BEHIND_M and BEHIND_SIGMAS times the sensor's depth noise at its range
+(range_noise_m); a run of at least MIN_EMPTY_BINS bins holding no point in front (empty, or
+behind) between two points `max_width_m` (plus a pixel's footprint each) apart crosses such a
+gap when the two lie on one surface (the line through either and the surface a gap's width
+beyond it meets the other: a step down past an edge, a corner's faces, do not) and the run is
+open (empty, or its farthest point behind the line between its ends: noise alone is not); the
 middle of the two points lies in it. A round dropout gives such crossings too, but no line of
 them as long as a seam (the clustering drops it).
 """
@@ -33,6 +39,15 @@ GRID_SAMPLE = 5_000
 # scan of a tee; a resampled or merged cloud).
 MIN_GRID_ORDER = 0.5
 MIN_POINTS = 1000
+# The floor or far wall seen through an opening lies at least this far behind the surface around it
+# (along the line of sight: a plate 3 mm thick, a wall seen from 30 degrees 1.7 mm down).
+BEHIND_M = 0.0015
+# ... and this many times the sensor's depth noise (range_noise_m): its own ripple is no opening.
+BEHIND_SIGMAS = 5.0
+NOISE_GROUPS = 8
+# Every 7th line of the image gives the noise: thousands of points still, and an odd stride takes
+# both of the two lines of bins a row of pixels falls on.
+NOISE_STRIDE = 7
 # A view's bins fill a box a few times its point count; past this many bins per point (an outlier
 # at a wide angle) the image is not built.
 MAX_BINS_PER_POINT = 16
@@ -57,21 +72,133 @@ def gap_midpoints(points: np.ndarray, camera_m: np.ndarray, *, max_width_m: floa
     rows, columns = (high - low + 1).tolist()
     if rows * columns > MAX_BINS_PER_POINT * len(points):
         return np.empty((0, 3))
+    offsets = points - camera_m
+    ranges = np.sqrt(np.einsum("ij,ij->i", offsets, offsets))
     # One point per bin: where two share one (rare at half the pitch), the last written.
     owner = np.full(rows * columns, -1, dtype=np.int32)
     owner[(bins[:, 0] - low[0]) * columns + (bins[:, 1] - low[1])] = np.arange(len(points), dtype=np.int32)
     image = owner.reshape(rows, columns)
-    filled = image >= 0
-    middles = []
-    for lines, occupied in ((image, filled), (image.T, np.ascontiguousarray(filled.T))):
-        first, second = _crossings(occupied)
-        ends_a, ends_b = points[_owner(lines, first)], points[_owner(lines, second)]
-        ranges = np.maximum(np.linalg.norm(ends_a - camera_m, axis=1), np.linalg.norm(ends_b - camera_m, axis=1))
-        footprint = pitch_rad * ranges
-        width = np.linalg.norm(ends_b - ends_a, axis=1)
-        narrow = width <= max_width_m + 2 * footprint
-        middles.append((ends_a[narrow] + ends_b[narrow]) / 2)
-    return np.vstack(middles)
+    # The widest opening spans this many bins where the nearest points lie.
+    nearest_m = np.percentile(ranges[::NOISE_STRIDE], 5)
+    reach = int(np.ceil((max_width_m / (pitch_rad * nearest_m) + 1) * BINS_PER_PIXEL))
+    sample = image[::NOISE_STRIDE]
+    sampled = np.flatnonzero(sample >= 0)
+    at, noise = range_noise_m(sampled, ranges[sample.ravel()[sampled]])
+    noise_m = np.interp(ranges, at, noise) if len(at) else np.zeros(len(ranges))
+    behind_m = np.maximum(BEHIND_M, BEHIND_SIGMAS * noise_m)
+    # The columns copied before the rows' pass takes its points behind out of the image.
+    return np.vstack([_line_middles(lines, points, ranges, behind_m, reach, max_width_m, pitch_rad)
+                      for lines in (np.ascontiguousarray(image.T), image)])
+
+
+def _line_middles(lines, points, ranges, behind_m, reach, max_width_m, pitch_rad) -> np.ndarray:
+    """(M, 3) middles of the crossings along the lines of `lines` (lines, bins; point indices, -1
+    empty; changed in place: the points _behind set to -1), their ends at most max_width_m plus
+    two pixel footprints at the farther end's range apart, on one surface (_one_surface) over an
+    open run (_open)."""
+    count = lines.shape[1]
+    flat = np.flatnonzero(lines >= 0)
+    indices = lines.ravel()[flat]
+    line_ranges, line_behind_m = ranges[indices], behind_m[indices]
+    behind = _behind(flat, count, line_ranges, reach, line_behind_m)
+    lines.ravel()[flat[behind]] = -1
+    first, second = _crossings(lines >= 0)
+    index_a, index_b = _owner(lines, first), _owner(lines, second)
+    range_a, range_b = ranges[index_a], ranges[index_b]
+    width = np.linalg.norm(points[index_b] - points[index_a], axis=1)
+    narrow = np.flatnonzero(width <= max_width_m + 2 * pitch_rad * np.maximum(range_a, range_b))
+    first, second, index_a, index_b = first[narrow], second[narrow], index_a[narrow], index_b[narrow]
+    range_a, range_b, tolerance = range_a[narrow], range_b[narrow], behind_m[index_a]
+    kept = _one_surface(flat, behind, count, line_ranges, first, second, range_a, range_b, reach, tolerance)
+    kept &= _open(flat, count, line_ranges, first, second, range_a, range_b, tolerance)
+    return (points[index_a[kept]] + points[index_b[kept]]) / 2
+
+
+def range_noise_m(flat: np.ndarray, ranges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The sensor's depth noise (m) as it grows with range: (ranges, noise) at NOISE_GROUPS
+    groups of equal count, by range, of the points at ascending flat positions `flat` (an image's
+    lines of bins) with `ranges`, that have a neighbouring pixel on either side in their line:
+    1.4826 x the median absolute second difference of range across the three / sqrt(6), the
+    standard deviation of one point's range about a smooth surface. Empty arrays where too few."""
+    step = np.diff(flat)
+    neighbours = np.flatnonzero((step[:-1] == BINS_PER_PIXEL) & (step[1:] == BINS_PER_PIXEL))
+    if len(neighbours) < NOISE_GROUPS:
+        return np.empty(0), np.empty(0)
+    second = np.abs(ranges[neighbours] - 2 * ranges[neighbours + 1] + ranges[neighbours + 2])
+    middle = ranges[neighbours + 1]
+    groups = np.array_split(np.argsort(middle, kind="stable"), NOISE_GROUPS)
+    at = np.array([np.median(middle[group]) for group in groups])
+    noise = np.array([1.4826 * np.median(second[group]) / np.sqrt(6) for group in groups])
+    return at, noise
+
+
+def _behind(flat: np.ndarray, count: int, ranges: np.ndarray, reach: int, behind_m: np.ndarray) -> np.ndarray:
+    """(K,) bool: which of the points at ascending flat positions `flat` (lines of `count` bins),
+    at `ranges` (K,) from the camera, lie over `behind_m` (K,) farther than the straight line, in
+    range over bins, between the points reach / BINS_PER_PIXEL pixels before and after them in
+    their line: the floor or far wall seen through an opening narrower than that (a step down past
+    an edge marks its first pixels too; _one_surface drops the runs they make)."""
+    shift = reach // BINS_PER_PIXEL
+    behind = np.zeros(len(flat), dtype=bool)
+    if len(flat) <= 2 * shift:
+        return behind
+    line = flat // count
+    end = len(flat) - shift
+    known = (line[: end - shift] == line[shift:end]) & (line[2 * shift:] == line[shift:end])
+    left, right = flat[: end - shift], flat[2 * shift:]
+    fraction = (flat[shift:end] - left) / (right - left)
+    range_left = ranges[: end - shift]
+    expected = range_left + (ranges[2 * shift:] - range_left) * fraction
+    behind[shift:end] = known & (ranges[shift:end] > expected + behind_m[shift:end])
+    return behind
+
+
+def _open(flat: np.ndarray, count: int, ranges: np.ndarray, first: np.ndarray, second: np.ndarray,
+          range_first: np.ndarray, range_second: np.ndarray, behind_m: np.ndarray) -> np.ndarray:
+    """(K,) bool: whether each run from flat position `first` to `second` of lines of `count` bins
+    (its ends' ranges range_first, range_second) is open, given every point at ascending flat
+    positions `flat` with `ranges`: no point within its bins or the bins above and below them
+    (missing pixels, as _crossings counts them), or the farthest of those lies over `behind_m`
+    behind the straight line between its ends. A point that noise put behind its neighbours'
+    line, in a stretch of surface _behind marked as a whole, is not."""
+    runs, entries = [], []
+    for shift in (-count, 0, count):
+        start = np.searchsorted(flat, first + shift, side="right")
+        inside = np.searchsorted(flat, second + shift, side="left") - start
+        runs.append(np.repeat(np.arange(len(first)), inside))
+        offsets = np.arange(inside.sum()) - np.repeat(np.cumsum(inside) - inside, inside)
+        entries.append(offsets + np.repeat(start, inside))
+    run, entry = np.concatenate(runs), np.concatenate(entries)
+    fraction = ((flat[entry] - first[run]) % count) / (second[run] - first[run])
+    excess = ranges[entry] - (range_first[run] + (range_second[run] - range_first[run]) * fraction) - behind_m[run]
+    deepest = np.full(len(first), -np.inf)
+    np.maximum.at(deepest, run, excess)
+    return (np.bincount(run, minlength=len(first)) == 0) | (deepest > 0)
+
+
+def _one_surface(flat: np.ndarray, behind: np.ndarray, count: int, ranges: np.ndarray, first: np.ndarray,
+                 second: np.ndarray, range_first: np.ndarray, range_second: np.ndarray, reach: int,
+                 tolerance_m: np.ndarray) -> np.ndarray:
+    """(K,) bool: whether each run from flat position `first` to `second` (ranges range_first,
+    range_second) joins two points of one surface, given the points at ascending flat positions
+    `flat` (lines of `count` bins) with their `ranges` and which lie `behind`: the line through
+    the run's end and the point at least `reach` bins beyond it, in range over bins, passes within
+    `tolerance_m` of its other end, from either side where such a point in front lies in the line.
+    A step down (a lap's edge, a part's silhouette against the table) or a corner's two faces does
+    not."""
+    line = first // count
+    result = np.ones(len(first), dtype=bool)
+    before = np.searchsorted(flat, first - reach, side="right") - 1
+    after = np.searchsorted(flat, second + reach, side="left")
+    for near, far, near_range, far_range, reference in (
+        (first, second, range_first, range_second, before), (second, first, range_second, range_first, after)
+    ):
+        inside = (reference >= 0) & (reference < len(flat))
+        reference = np.clip(reference, 0, len(flat) - 1)
+        known = inside & (flat[reference] // count == line) & ~behind[reference]
+        slope = (near_range - ranges[reference]) / np.where(known, near - flat[reference], 1)
+        result &= ~known | (np.abs(near_range + slope * (far - near) - far_range) <= tolerance_m)
+    return result
 
 
 def _crossings(filled: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
