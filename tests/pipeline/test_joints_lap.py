@@ -112,6 +112,33 @@ def test_what_is_not_a_lap_gives_no_lap(rng, shape):
     assert isinstance(lap.fit(SortedProfile.of(u, w, PARAMS)), NoFit)
 
 
+@pytest.mark.parametrize("radius_m", [0.04, 0.08, 0.12])
+@pytest.mark.parametrize("tilt_deg", [0.0, 30.0])
+def test_the_crown_of_a_curved_part_is_no_lap(radius_m, tilt_deg):
+    """A tube's crown across 50 mm (40-120 mm radius, seen square or 30 degrees off), in 0.4 mm of
+    noise and depth quantised in 1 mm steps: two parallel lines split anywhere on it leave a
+    2-2.5 mm 'step', and the code before the bow test took it for a lap in 5-18 of 20 such
+    sections. A plate's surface is flat; the crown's bows, so none is a lap."""
+    u0 = np.arange(-0.025, 0.025, PITCH_M)
+    w0 = np.sqrt(radius_m**2 - u0**2) - radius_m
+    turn = np.radians(tilt_deg)
+    u, w = np.cos(turn) * u0 - np.sin(turn) * w0, np.sin(turn) * u0 + np.cos(turn) * w0
+    order = np.argsort(u)
+    for seed in range(20):
+        noisy = np.round((w[order] + np.random.default_rng(seed).normal(0.0, 0.0004, len(u))) / 0.001) * 0.001
+        assert isinstance(lap.fit(SortedProfile.of(u[order], noisy, PARAMS)), NoFit)
+
+
+def test_the_bow_of_a_plate_is_measured_beyond_its_noise(rng):
+    """A flat plate's 10-40 mm in 0.5 mm of noise bows by no more than noise allows; a 40 mm
+    radius crown over 25 mm does."""
+    for length in (0.010, 0.040):
+        x = np.arange(0.0, length, PITCH_M)
+        assert not lap._bowed(x, 0.3 * x + rng.normal(0.0, 0.0005, len(x)))
+    x = np.arange(-0.0125, 0.0125, PITCH_M)
+    assert lap._bowed(x, np.sqrt(0.04**2 - x**2) + rng.normal(0.0, 0.0005, len(x)))
+
+
 def test_a_step_with_too_little_of_either_plate_beside_it_is_no_lap(rng):
     u, w, _, _ = lap_profile(rng)
     near = np.abs(u - 0.002) < 0.004  # 4 mm of each plate

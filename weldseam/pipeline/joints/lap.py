@@ -61,6 +61,12 @@ SHADOW_GAP_M = 0.0015
 # stretch the camera would have seen is a gap between two parts' faces, stepped (a fixture's face
 # beside a block's, 2-3 mm proud: 7.6-9 mm seen empty, where laps of seeds 0-5 end 0-0.8 mm short).
 SEEN_GAP_M = 0.003
+# A plate is flat: its surface bows from its line by no more than this, beyond BOW_SIGMAS times
+# the bow's own uncertainty. Two crowns of a curved part beside a shallow valley, fitted by two
+# parallel lines, pass for a lap's plates stepped 2-2.5 mm (they bow 1.1-1.4 mm over 25 mm, median;
+# a lap's plates 0.1-0.4 mm in the same noise).
+MAX_BOW_M = 0.0005
+BOW_SIGMAS = 3.0
 # The fewest points a surface is fitted to.
 MIN_SIDE_POINTS = 5
 # A plate with more than this share of its points near the step below its line has a groove
@@ -107,6 +113,8 @@ def fit(profile: SortedProfile) -> ProfileFit | NoFit:
         return NoFit("the step is not a lap plate's thickness (1.5-7 mm)")
     if height < MIN_STEP_SIGMAS * plates.sigma:
         return NoFit("the step is within the surfaces' noise")
+    if any(_bowed(x[inliers], y[inliers]) for x, y, inliers in (plates.left, plates.right)):
+        return NoFit("a plate surface is curved (two crowns of a curved part, not a plate on a plate)")
     # side: +1 when the top plate lies right of (beyond) the edge, the bottom plate toward -s.
     side = 1 if step > 0 else -1
     (bottom, bottom_y0), top = ((plates.left, plates.left_y0), plates.right) if side > 0 else \
@@ -148,6 +156,26 @@ def _shadow(height: float, side: int, plates_along: np.ndarray, plates_normal: n
     `plates_along`); none where it lies over the bottom plate's (it sees the edge face)."""
     over, up = float(np.dot(toward, plates_along)) * side, float(np.dot(toward, plates_normal))
     return height * over / up if over > 0 and up > 0 else 0.0
+
+
+def _bowed(x: np.ndarray, y: np.ndarray) -> bool:
+    """Whether a surface's points (x, y) bow from a straight line by more than MAX_BOW_M beyond
+    BOW_SIGMAS times the bow's own uncertainty: the quadratic term c of y = a + b x + c z, z the
+    centred x^2 (least squares, c = sum(z y) / sum(z^2)), bows the surface by |c| h^2 over its half
+    extent h, known to sigma h^2 / sqrt(sum(z^2)) (sigma: the robust noise about the quadratic)."""
+    if len(x) < MIN_SIDE_POINTS:
+        return False
+    centred = x - mean(x)
+    z = centred * centred
+    z = z - mean(z)
+    spread = float(z @ z)
+    if spread <= 0.0:
+        return False
+    intercept, slope = line(centred, y)
+    c = float(z @ (y - intercept - slope * centred)) / spread
+    half = float(np.ptp(x)) / 2
+    sigma = noise(y - intercept - slope * centred - c * z)
+    return abs(c) * half * half - BOW_SIGMAS * sigma * half * half / np.sqrt(spread) > MAX_BOW_M
 
 
 def _dips(surface, y0: float, slope: float, depth: float, stretch: tuple[float, float]) -> bool:
