@@ -44,6 +44,8 @@ MIN_POINTS = 1000
 BEHIND_M = 0.0015
 # ... and this many times the sensor's depth noise (range_noise_m): its own ripple is no opening.
 BEHIND_SIGMAS = 5.0
+# The noise is measured in this many groups of points by range (a stereo sensor's grows with the
+# square of it) and interpolated between them.
 NOISE_GROUPS = 8
 # Every 7th line of the image gives the noise: thousands of points still, and an odd stride takes
 # both of the two lines of bins a row of pixels falls on.
@@ -55,9 +57,10 @@ MAX_BINS_PER_POINT = 16
 
 def gap_midpoints(points: np.ndarray, camera_m: np.ndarray, *, max_width_m: float) -> np.ndarray:
     """(M, 3) middles of the gap crossings in a single view's scan `points` (N, 3, finite) seen
-    from `camera_m` (3,): empty runs of at least MIN_EMPTY_BINS bins in a row or a column of the
-    direction image, between points at most max_width_m + 2 pixel footprints apart. None found
-    (no sensor grid: sensor_grid) gives (0, 3)."""
+    from `camera_m` (3,): runs of at least MIN_EMPTY_BINS bins in a row or a column of the
+    direction image holding no point in front (empty, or _behind), between two points of one
+    surface at most max_width_m + 2 pixel footprints apart, the run open (see the module). None
+    found (no sensor grid: sensor_grid) gives (0, 3)."""
     if len(points) < MIN_POINTS:
         return np.empty((0, 3))
     directions = image_directions(points, camera_m)
