@@ -8,7 +8,7 @@ from weldseam.config import ExtendConfig
 from weldseam.geometry import polyline_length
 from weldseam.pipeline.ends import end_curve, seam_line
 from weldseam.pipeline import ends, extend
-from weldseam.pipeline.extend import extend_seam, extend_seams
+from weldseam.pipeline.extend import _larger_pieces, extend_seam, extend_seams
 from weldseam.pipeline.holes import HOLE_EDGE_M, _arrival, _bridge, hole_aim, hole_aims
 from weldseam.pipeline.parallel import worker_process
 from weldseam.pipeline.section import PointFlag, SectionFit
@@ -333,17 +333,18 @@ def test_a_hole_on_a_straight_aim_is_bridged_along_it_not_the_lean_of_the_first_
 @pytest.mark.parametrize("with_worker", [False, True])
 def test_extending_the_ends_apart_gives_the_seams_extended_one_end_after_the_other(rng, with_worker):
     """The ends of a loop's arc meet (one stops where the other's extension is, across a hole in
-    the gap), a second seam is shorter than the ends' look-back (extended one end after the
-    other) and a third is closed (left alone)."""
+    the gap), a second seam on the rest of the ring is shorter than the ends' look-back (extended
+    one end after the other, stopping short of the larger arc) and a third is closed (left alone,
+    away from the ring)."""
     points = ring_groove_plate(rng)
     gap = np.abs(np.arctan2(points[:, 1], points[:, 0]) + 0.4) < 0.15
     points = points[~(gap & (np.abs(np.hypot(points[:, 0], points[:, 1]) - RING_RADIUS_M) < 0.03))]
     surface = surface_of(points)
     closed = ring_arc(0.0, 2 * np.pi)
-    seams = [ring_arc(0.0, 1.5 * np.pi), ring_arc(0.5 * np.pi, 0.5 * np.pi + 0.5), TracedSeam(
-        closed.positions_m, closed.torch_axes, True, JointKind.V_GROOVE, 1.0)]
+    seams = [ring_arc(0.0, 1.5 * np.pi), ring_arc(1.55 * np.pi, 1.55 * np.pi + 0.3), TracedSeam(
+        closed.positions_m + [0.0, 0.0, 0.5], closed.torch_axes, True, JointKind.V_GROOVE, 1.0)]
     params = replace(ExtendConfig(), step_m=STEP_M)
-    one_after_the_other = [extend_seam(seam, surface, params) for seam in seams]
+    one_after_the_other = [extend_seam(seam, surface, params, _larger_pieces(seams, k)) for k, seam in enumerate(seams)]
     if with_worker:
         with worker_process(surface):
             apart = extend_seams(seams, surface, params)
@@ -357,6 +358,32 @@ def test_extending_the_ends_apart_gives_the_seams_extended_one_end_after_the_oth
         assert serial.holes == parallel.holes and serial.closed == parallel.closed
 
 
+def test_an_extension_stops_short_of_the_points_it_is_given_to_stop_at(rng):
+    """A piece of 3 sections at x = 60-64 mm on a straight groove, told to stop at a piece traced
+    at x = -50-8 mm: its extension ends two steps short of it, not over it."""
+    x, y = grid((-0.09, 0.09), (-0.02, 0.02))
+    points = np.column_stack([x, y, -v_depth(y) + rng.normal(0, 0.0001, len(x))])
+    axis = [0.0, 0.0, -1.0]
+    small, large = straight_trace(0.060, 0.0645, axis), straight_trace(-0.050, 0.008, axis)
+    params = replace(ExtendConfig(), step_m=STEP_M)
+    stopped = extend_seam(small, surface_of(points), params, large.positions_m).positions_m[:, 0]
+    assert 0.008 + STEP_M < stopped.min() < 0.008 + 3 * STEP_M
+    assert extend_seam(small, surface_of(points), params).positions_m[:, 0].min() < -0.08, "else it runs on"
+
+
+def test_only_a_piece_of_a_few_sections_stops_and_only_at_a_larger_piece_of_another_joint():
+    """A piece's few sections name its joint; carried over a larger piece of another joint, the
+    longest kept, it would rename that one. A piece of the same joint, or a piece traced over six
+    sections or more, extends as it would alone."""
+    axis = [0.0, 0.0, -1.0]
+    small = replace(straight_trace(0.060, 0.0645, axis), joint=JointKind.FILLET)
+    large = straight_trace(-0.050, 0.008, axis)
+    same = replace(straight_trace(0.07, 0.072, axis), joint=JointKind.FILLET)
+    longer = replace(straight_trace(0.1, 0.12, axis), joint=JointKind.FILLET)
+    seams = [small, large, same, longer]
+    assert _larger_pieces(seams, 0).tobytes() == large.positions_m.tobytes()
+    assert len(_larger_pieces(seams, 2)) == len(large.positions_m)
+    assert len(_larger_pieces(seams, 3)) == 0 and len(_larger_pieces(seams, 1)) == 0
 
 
 def one_face_ahead(on_ring: bool, flags: int = int(PointFlag.ONE_FACE)):

@@ -36,7 +36,7 @@ from weldseam.pipeline.ends import (
     CORNER_PAST_M, END_BASELINE_M, NOT_FULL, TANGENT_BASELINE_M, SeamLine, ahead, end_curve, end_fit, last_full,
     on_curve, seam_line,
 )
-from weldseam.pipeline.joints import ON_SURFACE, JointKind
+from weldseam.pipeline.joints import ON_SURFACE, JointKind, one_joint
 from weldseam.pipeline.parallel import map_shared
 from weldseam.pipeline.section import FineSurface, PointFlag, SectionFit, section_frames
 from weldseam.pipeline.holes import across_hole, hole_aims, hole_of
@@ -81,10 +81,11 @@ def extend_seams(seams: list[TracedSeam], surface: FineSurface, params: ExtendCo
     for k, seam in enumerate(seams):
         if seam.closed or len(seam.positions_m) < 2:
             continue
+        others = _larger_pieces(seams, k)
         if len(seam.positions_m) >= TEMPLATE_MEMORY and polyline_length(seam.positions_m) > TANGENT_BASELINE_M:
-            jobs += [(k, seam, True, params), (k, seam, False, params)]
+            jobs += [(k, seam, True, params, others), (k, seam, False, params, others)]
         else:
-            jobs.append((k, seam, None, params))
+            jobs.append((k, seam, None, params, others))
     done: dict[int, list] = {}
     for (k, *_), extension in zip(jobs, map_shared(_extension_job, (surface,), jobs)):
         done.setdefault(k, []).append(extension)
@@ -99,14 +100,28 @@ def extend_seams(seams: list[TracedSeam], surface: FineSurface, params: ExtendCo
     return result
 
 
-def extend_seam(seam: TracedSeam, surface: FineSurface, params: ExtendConfig) -> TracedSeam:
+def _larger_pieces(seams: list[TracedSeam], k: int) -> np.ndarray:
+    """(M, 3) where the k-th seam's extension stops, when it has fewer than TEMPLATE_MEMORY points
+    (a piece of a few sections, its joint named by them alone): the points of every seam with more
+    points whose joint is another (joints.one_joint). None for a larger piece, or one of the same
+    joint (its extension may reach further than the larger piece's own, as over a block's edge)."""
+    own, size = seams[k].joint, len(seams[k].positions_m)
+    pieces = [seam.positions_m for seam in seams
+              if size < TEMPLATE_MEMORY and len(seam.positions_m) > size and not one_joint(own, seam.joint)]
+    return np.vstack(pieces) if pieces else np.empty((0, 3))
+
+
+def extend_seam(
+    seam: TracedSeam, surface: FineSurface, params: ExtendConfig, others: np.ndarray | None = None
+) -> TracedSeam:
     """The seam with sections added beyond both open ends while they fit its joint near the
-    predicted place (see the module), so the path reaches the seam's real ends."""
+    predicted place (see the module), so the path reaches the seam's real ends (or `others`, the
+    points of larger pieces: extend_end)."""
     if seam.closed or len(seam.positions_m) < 2:
         return seam
     extension = Extension(surface, seam.joint, params)
     start, start_stop = extend_end(extension, seam.positions_m[::-1], seam.torch_axes[::-1], seam.point_flags[::-1],
-                                   seam.across_spread)
+                                   seam.across_spread, others)
     before = _fits(start)[::-1]
     end, end_stop = extend_end(
         extension,
@@ -114,6 +129,7 @@ def extend_seam(seam: TracedSeam, surface: FineSurface, params: ExtendConfig) ->
         np.array([f.torch_axis for f in before] + list(seam.torch_axes)),
         np.array([f.flags for f in before] + list(seam.point_flags), np.uint8),
         seam.across_spread,
+        others,
     )
     return _extended(seam, start, start_stop, end, end_stop)
 
@@ -121,12 +137,12 @@ def extend_seam(seam: TracedSeam, surface: FineSurface, params: ExtendConfig) ->
 def _extension_job(surface: FineSurface, job) -> tuple[list[Step], Step | None] | TracedSeam:
     """(steps, stop) of one end of a seam (at_start True or False), or the whole seam extended
     (at_start None)."""
-    _, seam, at_start, params = job
+    _, seam, at_start, params, others = job
     if at_start is None:
-        return extend_seam(seam, surface, params)
+        return extend_seam(seam, surface, params, others)
     order = slice(None, None, -1) if at_start else slice(None)
     return extend_end(Extension(surface, seam.joint, params), seam.positions_m[order], seam.torch_axes[order],
-                      seam.point_flags[order], seam.across_spread)  # fmt: skip
+                      seam.point_flags[order], seam.across_spread, others)  # fmt: skip
 
 
 def _fits(steps: list[Step]) -> list[SectionFit]:
@@ -284,17 +300,25 @@ class SeamEnd:
 
 
 def extend_end(
-    extension: Extension, seam_positions, seam_axes, seam_flags=None, spread: float = 1.0
+    extension: Extension, seam_positions, seam_axes, seam_flags=None, spread: float = 1.0,
+    others: np.ndarray | None = None,
 ) -> tuple[list[Step], Step | None]:
     """The steps that extend a seam (points and axes in travel order, `spread` its across_spread)
     beyond its last point (see the module), and the step that stopped it where it came within two
-    steps of the seam away from this end (None if it stopped otherwise)."""
+    steps of the seam away from this end (None if it stopped otherwise). It also stops short of a
+    step within two steps of `others` (M, 3; _larger_pieces): an extension carries its piece's
+    joint on from its last fits, and where pieces overlap the longest is kept, so a piece of two
+    or three sections carried over a traced piece of 70 took its place, its kind with it (a square
+    butt named a V-groove or a bevel). A step of several fits (a hole crossed) keeps those short
+    of the larger piece. Ahead, join takes the two on, or the larger one's own extension runs over
+    this one."""
     positions = np.array(seam_positions)
     params = extension.params
     # The seam away from this end: an extension that reaches it has gone round a loop.
     arc = arc_lengths(positions)
     elsewhere = positions[arc < arc[-1] - 2 * END_BASELINE_M]
     elsewhere_tree = cKDTree(elsewhere) if len(elsewhere) else None
+    ahead_tree = cKDTree(others) if others is not None and len(others) else None
     end = SeamEnd(list(seam_positions), list(seam_axes), [False] * len(positions), *end_curve(positions), params.step_m,
                   params.max_skip_m, templates=_end_templates(extension, positions, np.array(seam_axes)),
                   last_full=last_full(positions, seam_flags), spread=spread)  # fmt: skip
@@ -303,8 +327,15 @@ def extend_end(
         step = next((found for strategy in STRATEGIES if (found := strategy(extension, end)) is not None), STOP)
         if step is STOP:
             break
-        if elsewhere_tree is not None and elsewhere_tree.query([f.point_m for f in step.fits])[0].min() <= 2 * params.step_m:
+        points = [f.point_m for f in step.fits]
+        if elsewhere_tree is not None and elsewhere_tree.query(points)[0].min() <= 2 * params.step_m:
             return steps, step
+        if ahead_tree is not None:
+            near = np.flatnonzero(ahead_tree.query(points)[0] <= 2 * params.step_m)
+            if len(near):
+                if near[0]:  # a hole crossed up to the larger piece: its fits short of it
+                    steps.append(replace(step, fits=step.fits[: near[0]]))
+                break
         steps.append(step)
         end.add(step, extension)
     return steps, None
