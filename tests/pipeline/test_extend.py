@@ -371,6 +371,21 @@ def test_an_extension_stops_short_of_the_points_it_is_given_to_stop_at(rng):
     assert extend_seam(small, surface_of(points), params).positions_m[:, 0].min() < -0.08, "else it runs on"
 
 
+def test_a_hole_crossed_up_to_the_points_it_is_given_to_stop_at_keeps_its_fits_short_of_them(rng):
+    """The hole of the test above (30 mm, x = -45..-15 mm), a piece of 3 sections before it, told
+    to stop at a piece traced from x = -12 mm on: it crosses the hole (interpolated poses on the
+    seam line) and ends two steps short of that piece, not at the plate's end."""
+    points = plate_ending_on_a_table(rng)
+    hole = (points[:, 0] > -0.045) & (points[:, 0] < -0.015)
+    axis = [0.0, 0.0, -1.0]
+    small, ahead = straight_trace(-0.060, -0.0555, axis), straight_trace(-0.012, -0.005, axis)
+    params = replace(ExtendConfig(), step_m=STEP_M, max_hole_m=0.05)
+    positions = extend_seam(small, surface_of(points[~hole]), params, ahead.positions_m).positions_m
+    across = positions[(positions[:, 0] > -0.044) & (positions[:, 0] < -0.017)]
+    assert len(across) and np.diff(np.sort(across[:, 0])).max() < 1.5 * STEP_M, "the hole is crossed"
+    assert -0.012 - 3 * STEP_M < positions[:, 0].max() < -0.012 - STEP_M, "and stops short of the piece ahead"
+
+
 def test_only_a_piece_of_a_few_sections_stops_and_only_at_a_larger_piece_of_another_joint():
     """A piece's few sections name its joint; carried over a larger piece of another joint, the
     longest kept, it would rename that one. A piece of the same joint, or a piece traced over six
