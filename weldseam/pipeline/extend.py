@@ -106,8 +106,9 @@ def _larger_pieces(seams: list[TracedSeam], k: int) -> np.ndarray:
     points whose joint is another (joints.one_joint). None for a larger piece, or one of the same
     joint (its extension may reach further than the larger piece's own, as over a block's edge)."""
     own, size = seams[k].joint, len(seams[k].positions_m)
-    pieces = [seam.positions_m for seam in seams
-              if size < TEMPLATE_MEMORY and len(seam.positions_m) > size and not one_joint(own, seam.joint)]
+    if size >= TEMPLATE_MEMORY:
+        return np.empty((0, 3))
+    pieces = [seam.positions_m for seam in seams if len(seam.positions_m) > size and not one_joint(own, seam.joint)]
     return np.vstack(pieces) if pieces else np.empty((0, 3))
 
 
