@@ -172,3 +172,16 @@ def test_a_band_as_wide_as_an_area_is_no_valley_along_its_length():
     widths = [band_width_m(state.working[members], CONFIG.condition.working_voxel_m) for members in found]
     assert max(widths) > 3 * CONFIG.descriptor.radius_m
     assert state.line_valleys == []
+
+
+def test_no_planned_seam_runs_along_the_table():
+    """Four sections of a corner at a part's foot on the table (rising 0.2-3.7 mm off it, so not
+    on it by their median), extended along the table, gave a 94 mm "fillet" lying on it beside a
+    V-groove and a square butt on a mount (broad scene, seed 83): the support rule is applied
+    again to the seams as extended. The two welds stay."""
+    scene, scan = draw_case("v_groove_and_square_butt", 83, broad=True)
+    result = plan_paths(Scan(points_m=scan.points_m, camera_origin_m=scan.camera_origin_m, source="test"), CONFIG)
+    heights = [np.median(path.positions_m[:, 2]) for path in result.paths]  # the table is z = 0
+    assert min(heights) > 0.02
+    assert sorted(path.joint for path in result.paths) == ["square_butt", "v_groove"]
+

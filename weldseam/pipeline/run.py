@@ -201,11 +201,16 @@ def _clusters(state: PlanState, c: PlanConfig, selected: np.ndarray):
 def _support(state: PlanState, c: PlanConfig) -> None:
     """The traced seams formed with the table under the part (the largest plane of unbent points
     that nothing lies beyond, found by _segment) dropped: there a part rests on the table."""
+    state.seams = _off_support(state, c, state.seams)
+
+
+def _off_support(state: PlanState, c: PlanConfig, seams: list) -> list:
+    """`seams` but those formed with the table (support.off_support), their candidates marked so."""
     if not c.support.enabled:
-        return
-    kept = support.off_support(state.seams, state.surface, state.support, c.support.tolerance_m)
-    reject_lost(state, state.seams, kept, Rejection.ON_SUPPORT)
-    state.seams = kept
+        return seams
+    kept = support.off_support(seams, state.surface, state.support, c.support.tolerance_m)
+    reject_lost(state, seams, kept, Rejection.ON_SUPPORT)
+    return kept
 
 
 def _boundary(state: PlanState, c: PlanConfig) -> None:
@@ -329,11 +334,13 @@ def _extend(state: PlanState, c: PlanConfig) -> None:
 
 def _split(state: PlanState, c: PlanConfig) -> None:
     """What lies inside a groove's opening is dropped first (it would split the groove), then the
-    seams are split and checked (slots, parts apart)."""
+    seams are split and checked (the support plane again: extended, a few sections of a corner at a
+    part's foot run on along the table; slots, parts apart)."""
     own = nested.outside_grooves(state.seams)
     reject_lost(state, state.seams, own, Rejection.INSIDE_SEAM)
     final = split.split_seams(own, state.holes, c.split, c.extend.step_m)
     reject_lost(state, own, final, Rejection.FRAGMENT)
+    final = _off_support(state, c, final)  # a few sections up a part's foot, extended along the table
     in_line = slots.in_line_seams(final, state.surface, c.section.half_width_m, state.support, c.support.tolerance_m)
     reject_lost(state, final, in_line, Rejection.SLOT)
     state.seams = apart.joined_seams(in_line, state.surface)
