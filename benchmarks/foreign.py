@@ -37,6 +37,10 @@ SETS = {
 }
 
 
+# What the JSON report keeps of each case (the scorer's coverage_min: the least covered seam's share).
+CASE_KEYS = ("case", "family", "passed", "reasons", "err_mean_mm", "coverage_min")
+
+
 def run_set(name: str, foreign: Path, work: Path) -> dict:
     """The scorer's totals and cases for one set (tools/run.py's results JSON)."""
     folder, kind, template, timeout = SETS[name]
@@ -87,7 +91,7 @@ def main() -> int:
     if args.json:
         print(json.dumps({name: value if name == "real" else value["totals"] | {
             "pooled_error_mm": pooled_error_mm(value["cases"]), "cases": [
-            {key: case.get(key) for key in ("case", "family", "passed", "reasons", "err_mean_mm")} for case in value["cases"]]}
+            {key: case.get(key) for key in CASE_KEYS} for case in value["cases"]]}
             for name, value in report.items()}, indent=1))
         return 0
     for name, value in report.items():
@@ -103,8 +107,17 @@ def main() -> int:
               f"mean {totals['mean_wall_s']:.1f} s a case")
         for case in value["cases"]:
             if not case["passed"]:
-                print(f"  {case['case']}: {'; '.join(case['reasons'])}")
+                print(failing_line(case))
     return 0
+
+
+def failing_line(case: dict) -> str:
+    """A failing case's line: why it fails, and the error and coverage the scorer measured (a case
+    that fails before and after a change may still lose ground: a square butt covered 84 -> 62 %)."""
+    def measured(key: str, form: str) -> str:
+        return "-" if case.get(key) is None else format(case[key], form)
+    return (f"  {case['case']}: {'; '.join(case['reasons'])} (error {measured('err_mean_mm', '.2f')} mm, "
+            f"coverage {measured('coverage_min', '.3f')})")
 
 
 if __name__ == "__main__":
