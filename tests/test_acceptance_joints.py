@@ -8,10 +8,10 @@ position error <= 0.5 mm; >= 95 % of the seen seam within 2 mm of the path; mean
 error <= 3 degrees; in a scene with two kinds (a lap and a fillet, a V-groove and a square
 butt), each seam named by its own. Known gaps are strict xfails: when a change closes one, its
 test fails until the mark is removed, so the list stays the truth about what the planner does.
-Seeds 0-4; today 206 of the 220 criteria hold (205 on machines that put clutter 1 just past 0.5 mm:
-ON_THE_EDGE) (lap, bevel, outside corner, square butt, tack
-welds, pipe on plate and the two-kind scenes mostly; saddle and the shallow valley least), and
-every seam of the two-kind scenes gets its own kind.
+Seeds 0-4; today 206 of the 220 criteria hold (lap, bevel, outside corner, square butt, tack
+welds, pipe on plate and the two-kind scenes mostly; saddle and the shallow valley least; 205 on
+machines that put clutter 1 just past 0.5 mm: ON_THE_EDGE), and every seam of the two-kind scenes
+gets its own kind.
 """
 
 import numpy as np

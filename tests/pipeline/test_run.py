@@ -184,4 +184,3 @@ def test_no_planned_seam_runs_along_the_table():
     heights = [np.median(path.positions_m[:, 2]) for path in result.paths]  # the table is z = 0
     assert min(heights) > 0.02
     assert sorted(path.joint for path in result.paths) == ["square_butt", "v_groove"]
-

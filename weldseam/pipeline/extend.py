@@ -103,8 +103,9 @@ def extend_seams(seams: list[TracedSeam], surface: FineSurface, params: ExtendCo
 def _larger_pieces(seams: list[TracedSeam], k: int) -> np.ndarray:
     """(M, 3) where the k-th seam's extension stops, when it has fewer than TEMPLATE_MEMORY points
     (a piece of a few sections, its joint named by them alone): the points of every seam with more
-    points whose joint is another (joints.one_joint). None for a larger piece, or one of the same
-    joint (its extension may reach further than the larger piece's own, as over a block's edge)."""
+    points whose joint is another (joints.one_joint). No points (0, 3) for a larger piece, nor from
+    pieces of the same joint (its extension may reach further than the larger piece's own, as over
+    a block's edge)."""
     own, size = seams[k].joint, len(seams[k].positions_m)
     if size >= TEMPLATE_MEMORY:
         return np.empty((0, 3))
