@@ -8,8 +8,8 @@ position error <= 0.5 mm; >= 95 % of the seen seam within 2 mm of the path; mean
 error <= 3 degrees; in a scene with two kinds (a lap and a fillet, a V-groove and a square
 butt), each seam named by its own. Known gaps are strict xfails: when a change closes one, its
 test fails until the mark is removed, so the list stays the truth about what the planner does.
-Seeds 0-4; today 206 of the 220 criteria hold (lap, bevel, outside corner, square butt, tack
-welds, pipe on plate and the two-kind scenes mostly; saddle and the shallow valley least; 205 on
+Seeds 0-4; today 205 of the 220 criteria hold (lap, bevel, outside corner, square butt, tack
+welds, pipe on plate and the two-kind scenes mostly; saddle and the shallow valley least; 204 on
 machines that put clutter 1 just past 0.5 mm: ON_THE_EDGE), and every seam of the two-kind scenes
 gets its own kind.
 """
@@ -39,6 +39,9 @@ KNOWN_GAPS: dict[tuple[str, int], set[str]] = {
     # corners lie 0.5-1 mm and ~5 degrees off (the main pipe is cut obliquely and rippled there),
     # and lift the mean axis error over 3 degrees.
     ("saddle", 0): {"axis"},
+    # On the edge: 3.00 degrees, and 3.09 since the branch's face is carried along the axis of full
+    # fits gathered over more of the seam where its last 32 mm hold few (extend.CORNER_FITS).
+    ("saddle", 2): {"axis"},
     # Carried on along its flank, the seam comes within 20 mm of a 12 mm piece past a stretch the
     # branch pipe hides; join bridges them through the corner on the long piece's end ray (the
     # seam curves there, and the corner lies 8.7 mm off it): a curved seam needs a curved bridge.

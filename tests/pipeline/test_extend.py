@@ -640,3 +640,48 @@ def test_an_inside_corner_is_carried_across_a_hole_only_onto_a_corner_with_both_
     assert not _measured(JointKind.FILLET, one_face), "maybe a surface ending in a shadow"
     assert _measured(JointKind.FILLET, replace(one_face, flags=0))
     assert _measured(JointKind.V_GROOVE, replace(one_face, kind=JointKind.V_GROOVE))
+
+
+class PipeFootFits:
+    """A stand-in surface along the foot of a pipe (radius 26 mm, axis z) standing on a plate:
+    fit_many gives a fit of both faces (90 degrees, the torch axis tilted 2 degrees at random)
+    where the section lies less than `seen_m` of arc from the seam's start, and beyond it a
+    corner with one face unseen (near the pipe's silhouette)."""
+
+    radius_m = 0.026
+
+    def __init__(self, rng, seen_m):
+        self.rng, self.seen_m = rng, seen_m
+
+    def fit_many(self, centres, travel, axes, lateral, kinds=None):
+        fits = []
+        for centre in centres:
+            angle = np.arctan2(centre[1], centre[0])
+            out = np.array([np.cos(angle), np.sin(angle), 0.0])
+            tilt = self.rng.normal(0.0, np.radians(2.0), 3)
+            axis = -(out + [0.0, 0.0, 1.0]) / np.sqrt(2) + tilt
+            axis /= np.linalg.norm(axis)
+            full = angle * self.radius_m < self.seen_m
+            fits.append(SectionFit(JointKind.FILLET, centre, axis, JointGeometry(included_deg=90.0 + self.rng.normal(0, 2)),
+                                   flags=0 if full else int(PointFlag.ONE_FACE)))  # fmt: skip
+        return fits
+
+
+def test_a_pipes_ruling_is_taken_from_the_full_fits_spread_over_the_seam(rng):
+    """Toward a standing pipe's silhouette the re-fitted sections see one face: of the 8 sections
+    over the last 32 mm of an 80 mm seam, the first 4 (14 mm) hold full fits; their normals turn
+    30 degrees, and 2-3 degrees of noise tilt the pipe's axis from them up to 20 degrees, half the
+    time over 4. With the 8 sections over the 32 mm before, the pipe's face is carried on along
+    its axis within 4 degrees in each of 20 draws of the noise (99 % of 200 within 3.2)."""
+    radius_m = PipeFootFits.radius_m
+    angles = np.arange(0.0, 0.08 / radius_m, STEP_M / radius_m)
+    out = np.column_stack([np.cos(angles), np.sin(angles), np.zeros(len(angles))])
+    positions, axes = radius_m * out, -(out + [0.0, 0.0, 1.0]) / np.sqrt(2)
+    off_axis_deg = []
+    for _ in range(20):
+        end = extend.SeamEnd(list(positions), list(axes), [False] * len(positions), *end_curve(positions), STEP_M,
+                             0.012, last_full=ends.last_full(positions, None))  # fmt: skip
+        template = end.corner(Extension(PipeFootFits(rng, seen_m=0.062), JointKind.FILLET, ExtendConfig()))
+        # Counter-clockwise seen from above, the torch pointing in and down: the pipe is on the right.
+        off_axis_deg.append(np.degrees(np.arccos(template.right @ [0.0, 0.0, 1.0])))
+    assert max(off_axis_deg) < 4.0

@@ -68,7 +68,7 @@ def corner_template(fits: list[SectionFit], travel: np.ndarray) -> CornerTemplat
     normals: dict[int, list] = {-1: [], 1: []}
     latest: dict[int, np.ndarray] = {}
     for fit, along in zip(fits, travel):
-        if fit.kind != CORNER or fit.flags or fit.geometry.included_deg is None:
+        if not full_corner(fit):
             continue
         half = np.radians(fit.geometry.included_deg) / 2
         lateral = unit(np.cross(along, fit.torch_axis))
@@ -79,6 +79,11 @@ def corner_template(fits: list[SectionFit], travel: np.ndarray) -> CornerTemplat
     if len(normals[1]) < MIN_FITS:
         return None
     return CornerTemplate(*(_ruling(np.array(normals[side]), latest[side]) for side in (-1, 1)))
+
+
+def full_corner(fit: SectionFit) -> bool:
+    """Whether `fit` is a corner fitted with both faces seen and its included angle measured."""
+    return fit.kind == CORNER and not fit.flags and fit.geometry.included_deg is not None
 
 
 def _ruling(normals: np.ndarray, latest: np.ndarray) -> np.ndarray:

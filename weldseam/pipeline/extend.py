@@ -31,7 +31,7 @@ from scipy.spatial import cKDTree
 from weldseam.config import ExtendConfig
 from weldseam.geometry import arc_lengths, bend_corner, even_indices, polyline_length, unit
 from weldseam.pipeline.bridge import GrooveTemplate, groove_template, part_ends_ahead
-from weldseam.pipeline.carried import CornerTemplate, corner_template
+from weldseam.pipeline.carried import CornerTemplate, corner_template, full_corner
 from weldseam.pipeline.ends import (
     CORNER_PAST_M, END_BASELINE_M, NOT_FULL, TANGENT_BASELINE_M, SeamLine, ahead, end_curve, end_fit, last_full,
     on_curve, seam_line,
@@ -51,7 +51,13 @@ TEMPLATE_MEMORY = 6
 # more than this, the next fit is also sought along the line (SeamEnd.aims).
 LINE_AIM_DEG = 5.0
 # A corner's faces are carried on from this many sections over the last TANGENT_BASELINE_M of
-# arc up to its last fit with both faces seen (SeamEnd.corner).
+# arc up to its last fit with both faces seen; where those hold enough full fits for a template
+# (carried.MIN_FITS) but fewer than this many, as many again over each stretch before it until they
+# do (SeamEnd.corner). A pipe's face normals turn round its axis, and the fewer and the closer the
+# fits, the more their noise tilts it: toward an independent scan's saddle's flank (a 26 mm
+# branch) the last 32 mm held four full fits over 9 mm, whose normals turned too little to give
+# the axis (the face's latest direction stood for it, 9 degrees off), and the carried wall, seen
+# 2-7 degrees from edge-on at the branch's silhouette, then looked seen from behind.
 CORNER_FITS = 8
 
 
@@ -262,20 +268,30 @@ class SeamEnd:
 
     def corner(self, extension: Extension) -> CornerTemplate | None:
         """The rulings of a corner's faces (carried.corner_template) from CORNER_FITS sections over
-        the last TANGENT_BASELINE_M of arc up to the last fit with both faces seen, fitted again
-        once per such fit; None for another joint or without such a fit."""
+        the last TANGENT_BASELINE_M of arc up to the last fit with both faces seen, and over each
+        such stretch before it while they make a template but hold fewer than CORNER_FITS fits
+        with both faces seen (carried.full_corner), back to the seam's start; fitted again once
+        per such fit; None for another joint or without such a fit."""
         if extension.joint != JointKind.FILLET or not self.last_full:
             return None
         index = self.last_full[0]
         if index not in self.corners:
             positions, axes = np.array(self.positions[: index + 1]), np.array(self.axes[: index + 1])
             arc = arc_lengths(positions)
-            window = arc >= arc[-1] - TANGENT_BASELINE_M
-            travel, frame_axes, lateral = section_frames(positions[window], axes[window], closed=False)
-            at = even_indices(len(travel), CORNER_FITS)
-            fits = extension.surface.fit_many(positions[window][at], travel[at], frame_axes[at], lateral[at],
-                                              {JointKind.FILLET})  # fmt: skip
-            self.corners[index] = corner_template(fits, travel[at])
+            fits, travels = [], []
+            for end in arc[-1] - TANGENT_BASELINE_M * np.arange(int(arc[-1] // TANGENT_BASELINE_M) + 1):
+                window = (arc >= end - TANGENT_BASELINE_M) & (arc <= end)
+                if np.count_nonzero(window) < 2:
+                    break
+                travel, frame_axes, lateral = section_frames(positions[window], axes[window], closed=False)
+                at = even_indices(len(travel), CORNER_FITS)
+                fits = extension.surface.fit_many(positions[window][at], travel[at], frame_axes[at], lateral[at],
+                                                  {JointKind.FILLET}) + fits  # fmt: skip
+                travels.insert(0, travel[at])
+                template = corner_template(fits, np.vstack(travels))
+                if template is None or sum(map(full_corner, fits)) >= CORNER_FITS:
+                    break
+            self.corners[index] = template
         return self.corners[index]
 
     def add(self, step: Step, extension: Extension) -> None:
