@@ -644,9 +644,10 @@ def test_an_inside_corner_is_carried_across_a_hole_only_onto_a_corner_with_both_
 
 class PipeFootFits:
     """A stand-in surface along the foot of a pipe (radius 26 mm, axis z) standing on a plate:
-    fit_many gives a fit of both faces (90 degrees, the torch axis tilted 2 degrees at random)
-    where the section lies less than `seen_m` of arc from the seam's start, and beyond it a
-    corner with one face unseen (near the pipe's silhouette)."""
+    fit_many gives a fit of both faces (the included angle 90 degrees and the torch axis the
+    bisector, each with 2 degrees of noise in each direction) where the section lies less than
+    `seen_m` of arc from the seam's start, and beyond it a corner with one face unseen (near the
+    pipe's silhouette)."""
 
     radius_m = 0.026
 
@@ -670,8 +671,8 @@ class PipeFootFits:
 def test_a_pipes_ruling_is_taken_from_the_full_fits_spread_over_the_seam(rng):
     """Toward a standing pipe's silhouette the re-fitted sections see one face: of the 8 sections
     over the last 32 mm of an 80 mm seam, the first 4 (14 mm) hold full fits; their normals turn
-    30 degrees, and 2-3 degrees of noise tilt the pipe's axis from them up to 20 degrees, half the
-    time over 4. With the 8 sections over the 32 mm before, the pipe's face is carried on along
+    30 degrees, and their noise tilts the pipe's axis from them up to 20 degrees, half the time
+    over 4. With the 8 sections over the 32 mm before, the pipe's face is carried on along
     its axis within 4 degrees in each of 20 draws of the noise (99 % of 200 within 3.2)."""
     radius_m = PipeFootFits.radius_m
     angles = np.arange(0.0, 0.08 / radius_m, STEP_M / radius_m)

@@ -278,7 +278,7 @@ class SeamEnd:
         if index not in self.corners:
             positions, axes = np.array(self.positions[: index + 1]), np.array(self.axes[: index + 1])
             arc = arc_lengths(positions)
-            fits, travels = [], []
+            fits, travels, template = [], [], None
             for end in arc[-1] - TANGENT_BASELINE_M * np.arange(int(arc[-1] // TANGENT_BASELINE_M) + 1):
                 window = (arc >= end - TANGENT_BASELINE_M) & (arc <= end)
                 if np.count_nonzero(window) < 2:
