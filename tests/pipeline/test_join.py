@@ -177,3 +177,15 @@ def test_a_zigzag_piece_is_joined_on_with_its_near_end_first():
     (joined,) = join_pieces(pieces, join_m=0.025, max_turn_deg=100.0, step_m=0.002)
     x = joined.positions_m[:, 0] if joined.positions_m[0, 0] > -0.03 else joined.positions_m[::-1, 0]
     assert np.all(np.diff(x) < 0.0005)  # on toward -x all the way: no step back
+
+
+def test_a_short_piece_further_round_a_tight_ring_is_joined_along_it_not_through_a_corner():
+    """A piece of a 30 mm ring and, 48 degrees further round (a saddle's flank hidden by its
+    branch), a 3-point piece too short to have a direction of its own: reached along the first
+    piece's end ray, turned to it, the seam would pass 9 mm outside the ring; the end's curve leads
+    to it, so they are joined along the ring (every point on it), with no corner."""
+    angles = np.radians(np.arange(0.0, 360.0, 4.0))
+    ring = 0.03 * np.column_stack([np.cos(angles), np.sin(angles), np.zeros(len(angles))])
+    (seam,) = join([piece(ring[:38]), piece(ring[49:52])])  # 0-148 and 196-204 degrees
+    assert len(seam.positions_m) == 38 + 3
+    assert np.allclose(np.linalg.norm(seam.positions_m, axis=1), 0.03)

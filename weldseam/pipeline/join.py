@@ -4,7 +4,9 @@ Several chains often trace the same seam, each a little further than the others,
 comes out in pieces (holes in the scan, junctions in the candidate band). Longest first, each
 stretch of seam is kept once; open pieces whose ends face each other are joined (never three ends
 meeting at a junction; a piece resting only on corners with one face unseen only along the curve
-of the other's full fits); a piece whose own ends meet is a closed loop.
+of the other's full fits), through the corner where they turn (a groove over a block's edge)
+unless one's end curve bends and leads to the other (a ring, a saddle: _curves_on); a piece
+whose own ends meet is a closed loop.
 """
 
 from __future__ import annotations
@@ -25,6 +27,8 @@ from weldseam.pipeline.trace import TracedSeam, end_to_end
 # Another piece of the same seam may start this many times as far sideways of the curve one piece's
 # end leads along as an extension would take a fit there (ends.sideways_reach_m).
 CONTINUE_SLACK = 2.0
+# A piece's end curve bending at a radius under this is a curve, not a straight run into a corner.
+MAX_CURVE_RADIUS_M = 0.1
 
 
 def join_seams(seams: list[TracedSeam], params: JoinConfig, step_m: float) -> list[TracedSeam]:
@@ -173,7 +177,7 @@ def _joined(
             if not (facing and along) or _junction((a[-1] + b[0]) / 2, others, join_m) \
                     or not _inferred_follows(first_way, second_way):
                 continue
-            corner = _corner(a, out_a, b, out_b, join_m)
+            corner = None if _curves_on(first_way, second_way, step_m) else _corner(a, out_a, b, out_b, join_m)
             if corner is None and not _continues(first_way, second_way, step_m):
                 continue
             between = (np.empty((0, 3)), np.empty((0, 3)), np.empty(0, np.uint8)) if corner is None else \
@@ -194,16 +198,37 @@ def _continues(a: TracedSeam, b: TracedSeam, step_m: float) -> bool:
     for before, after in ((a, b), (b.reversed(), a.reversed())):
         if not _directed(before.positions_m):
             continue
-        last = before.positions_m[-1]
-        direction, bend = end_curve(before.positions_m)
-        target = after.positions_m[0]
-        distance = float(np.linalg.norm(target - last))
-        predicted, travel = ahead(last, direction, bend, distance)
-        _, sideways = offsets(target, predicted, travel, before.torch_axes[-1])
+        sideways, distance, _ = _led_to(before, after)
         bound = sideways_reach_m(step_m, distance) * max(a.across_spread, b.across_spread)
         if sideways > CONTINUE_SLACK * bound:
             return False
     return True
+
+
+def _curves_on(a: TracedSeam, b: TracedSeam, step_m: float) -> bool:
+    """Whether b's start lies where a's end curve leads, or a's end where b's start curve leads
+    back, a curve bending at a radius under MAX_CURVE_RADIUS_M, within what an extension stepping
+    `step_m` takes across the gap (ends.sideways_reach_m): a ring's or a saddle's pieces, which
+    straight rays would join through a corner off the seam."""
+    for before, after in ((a, b), (b.reversed(), a.reversed())):
+        if not _directed(before.positions_m):
+            continue
+        sideways, distance, bend = _led_to(before, after)
+        if bend * MAX_CURVE_RADIUS_M >= 1.0 and sideways <= sideways_reach_m(step_m, distance):
+            return True
+    return False
+
+
+def _led_to(before: TracedSeam, after: TracedSeam) -> tuple[float, float, float]:
+    """How far (m) after's start lies sideways of the torch axis from where before's end curve
+    leads (ends.ahead over the gap: ends.offsets), the gap (m) and the curve's bend (1/m)."""
+    last = before.positions_m[-1]
+    direction, bend = end_curve(before.positions_m)
+    target = after.positions_m[0]
+    distance = float(np.linalg.norm(target - last))
+    predicted, travel = ahead(last, direction, bend, distance)
+    _, sideways = offsets(target, predicted, travel, before.torch_axes[-1])
+    return sideways, distance, float(np.linalg.norm(bend))
 
 
 def _inferred_follows(a: TracedSeam, b: TracedSeam) -> bool:
