@@ -31,7 +31,7 @@ from scipy.spatial import cKDTree
 from weldseam.config import ExtendConfig
 from weldseam.geometry import arc_lengths, bend_corner, even_indices, polyline_length, unit
 from weldseam.pipeline.bridge import GrooveTemplate, groove_template, part_ends_ahead
-from weldseam.pipeline.carried import CornerTemplate, corner_template, full_corner
+from weldseam.pipeline.carried import MIN_FITS, CornerTemplate, corner_template, full_corner
 from weldseam.pipeline.ends import (
     CORNER_PAST_M, END_BASELINE_M, NOT_FULL, TANGENT_BASELINE_M, SeamLine, ahead, end_curve, end_fit, last_full,
     on_curve, seam_line,
@@ -278,7 +278,7 @@ class SeamEnd:
         if index not in self.corners:
             positions, axes = np.array(self.positions[: index + 1]), np.array(self.axes[: index + 1])
             arc = arc_lengths(positions)
-            fits, travels, template = [], [], None
+            fits, travels = [], []
             for end in arc[-1] - TANGENT_BASELINE_M * np.arange(int(arc[-1] // TANGENT_BASELINE_M) + 1):
                 window = (arc >= end - TANGENT_BASELINE_M) & (arc <= end)
                 if np.count_nonzero(window) < 2:
@@ -288,10 +288,10 @@ class SeamEnd:
                 fits = extension.surface.fit_many(positions[window][at], travel[at], frame_axes[at], lateral[at],
                                                   {JointKind.FILLET}) + fits  # fmt: skip
                 travels.insert(0, travel[at])
-                template = corner_template(fits, np.vstack(travels))
-                if template is None or sum(map(full_corner, fits)) >= CORNER_FITS:
+                full = sum(map(full_corner, fits))
+                if full < MIN_FITS or full >= CORNER_FITS:  # no template (corner_template), or enough
                     break
-            self.corners[index] = template
+            self.corners[index] = corner_template(fits, np.concatenate([np.empty((0, 3)), *travels]))
         return self.corners[index]
 
     def add(self, step: Step, extension: Extension) -> None:

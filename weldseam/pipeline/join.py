@@ -177,8 +177,9 @@ def _joined(
             if not (facing and along) or _junction((a[-1] + b[0]) / 2, others, join_m) \
                     or not _inferred_follows(first_way, second_way):
                 continue
-            corner = None if _curves_on(first_way, second_way, step_m) else _corner(a, out_a, b, out_b, join_m)
-            if corner is None and not _continues(first_way, second_way, step_m):
+            leads = _leads(first_way, second_way)
+            corner = None if _curves_on(leads, step_m) else _corner(a, out_a, b, out_b, join_m)
+            if corner is None and not _continues(leads, max(first.across_spread, second.across_spread), step_m):
                 continue
             between = (np.empty((0, 3)), np.empty((0, 3)), np.empty(0, np.uint8)) if corner is None else \
                 (corner[None], unit(first_way.torch_axes[-1] + second_way.torch_axes[0])[None], np.zeros(1, np.uint8))
@@ -186,49 +187,46 @@ def _joined(
     return best
 
 
-def _continues(a: TracedSeam, b: TracedSeam, step_m: float) -> bool:
+def _continues(leads: list[tuple[float, float, float]], spread: float, step_m: float) -> bool:
     """Whether two pieces joined straight continue each other: b's start lies where a's end curve
-    leads (ends.ahead over the gap between them), and a's end where b's start curve leads back,
-    each within CONTINUE_SLACK x what an extension stepping `step_m` takes across the gap
-    (ends.sideways_reach_m) sideways of the torch axis, widened by the pieces' across_spread: a
-    piece's end curve, its bend read over its last few points, may miss by that much across a
-    wider gap. A piece without a direction of its own (_directed) defers to the other. Beside a
-    tack weld, a chain on its edge fits a groove 3-4 mm off the seam over 20 mm, its line turned
-    25 degrees from the seam's, and its curve misses the seam's end by 10 mm: no piece of it."""
-    for before, after in ((a, b), (b.reversed(), a.reversed())):
-        if not _directed(before.positions_m):
-            continue
-        sideways, distance, _ = _led_to(before, after)
-        bound = sideways_reach_m(step_m, distance) * max(a.across_spread, b.across_spread)
-        if sideways > CONTINUE_SLACK * bound:
-            return False
-    return True
+    leads (ends.ahead over the gap between them), and a's end where b's start curve leads back
+    (`leads`: _leads), each within CONTINUE_SLACK x what an extension stepping `step_m` takes
+    across the gap (ends.sideways_reach_m) sideways of the torch axis, widened by the pieces'
+    larger across_spread (`spread`): a piece's end curve, its bend read over its last few points,
+    may miss by that much across a wider gap. A piece without a direction of its own (_directed)
+    defers to the other. Beside a tack weld, a chain on its edge fits a groove 3-4 mm off the seam
+    over 20 mm, its line turned 25 degrees from the seam's, and its curve misses the seam's end by
+    10 mm: no piece of it."""
+    return all(sideways <= CONTINUE_SLACK * (sideways_reach_m(step_m, distance) * spread)
+               for sideways, distance, _ in leads)
 
 
-def _curves_on(a: TracedSeam, b: TracedSeam, step_m: float) -> bool:
+def _curves_on(leads: list[tuple[float, float, float]], step_m: float) -> bool:
     """Whether b's start lies where a's end curve leads, or a's end where b's start curve leads
-    back, a curve bending at a radius under MAX_CURVE_RADIUS_M, within what an extension stepping
-    `step_m` takes across the gap (ends.sideways_reach_m): a ring's or a saddle's pieces, which
-    straight rays would join through a corner off the seam."""
+    back (`leads`: _leads), a curve bending at a radius under MAX_CURVE_RADIUS_M, within what an
+    extension stepping `step_m` takes across the gap (ends.sideways_reach_m): a ring's or a
+    saddle's pieces, which straight rays would join through a corner off the seam."""
+    return any(bend * MAX_CURVE_RADIUS_M >= 1.0 and sideways <= sideways_reach_m(step_m, distance)
+               for sideways, distance, bend in leads)
+
+
+def _leads(a: TracedSeam, b: TracedSeam) -> list[tuple[float, float, float]]:
+    """For a's end toward b's start, and b's start back toward a's end, each of a piece with a
+    direction of its own (_directed): how far (m) the other's facing end lies sideways of the torch
+    axis from where this end's curve leads (ends.ahead over the gap: ends.offsets), the gap (m) and
+    the curve's bend (1/m)."""
+    leads = []
     for before, after in ((a, b), (b.reversed(), a.reversed())):
         if not _directed(before.positions_m):
             continue
-        sideways, distance, bend = _led_to(before, after)
-        if bend * MAX_CURVE_RADIUS_M >= 1.0 and sideways <= sideways_reach_m(step_m, distance):
-            return True
-    return False
-
-
-def _led_to(before: TracedSeam, after: TracedSeam) -> tuple[float, float, float]:
-    """How far (m) after's start lies sideways of the torch axis from where before's end curve
-    leads (ends.ahead over the gap: ends.offsets), the gap (m) and the curve's bend (1/m)."""
-    last = before.positions_m[-1]
-    direction, bend = end_curve(before.positions_m)
-    target = after.positions_m[0]
-    distance = float(np.linalg.norm(target - last))
-    predicted, travel = ahead(last, direction, bend, distance)
-    _, sideways = offsets(target, predicted, travel, before.torch_axes[-1])
-    return sideways, distance, float(np.linalg.norm(bend))
+        last = before.positions_m[-1]
+        direction, bend = end_curve(before.positions_m)
+        target = after.positions_m[0]
+        distance = float(np.linalg.norm(target - last))
+        predicted, travel = ahead(last, direction, bend, distance)
+        _, sideways = offsets(target, predicted, travel, before.torch_axes[-1])
+        leads.append((sideways, distance, float(np.linalg.norm(bend))))
+    return leads
 
 
 def _inferred_follows(a: TracedSeam, b: TracedSeam) -> bool:
