@@ -206,3 +206,32 @@ def test_two_pieces_end_to_end_take_the_longer_ones_joint_and_weigh_the_rest_by_
     assert joined.point_flags.tolist() == [0] * 30 + [4] + [0] * 10
     assert joined.holes == (earlier,) and joined.sources == frozenset({30, 10})
     assert np.array_equal(joined.reversed().positions_m, joined.positions_m[::-1])
+
+
+class TwoJointsSurface:
+    """A stand-in FineSurface: a fillet along x at y = 0 (a clamp's foot, say), and 20 mm aside a
+    corner that a section reaches only past x = `beyond_m` (its window then takes it instead)."""
+
+    def __init__(self, beyond_m: float):
+        self.beyond_m = beyond_m
+
+    def fit_many(self, centres, travel, axes, lateral, kinds=None):
+        points = [centre + ([0.0, 0.02, 0.0] if centre[0] >= self.beyond_m else [0.0, 0.001, 0.0]) for centre in centres]
+        return [SectionFit(JointKind.FILLET, point, np.array([0.0, -0.7071, -0.7071])) for point in points]
+
+
+def test_two_sections_that_find_joints_centimetres_apart_are_no_seam_and_a_short_seam_is_kept():
+    """A short chain (two sections 3 mm apart) whose sections find joints 20 mm apart: too few to
+    be outvoted as off their neighbours' line, but no seam (a seam crossing its chain at up to 60
+    degrees lies at most twice as far along it); the same chain finding one joint is a piece."""
+    chain = Chain(np.array([[0.0, 0.0, 0.0], [0.003, 0.0, 0.0]]), False)
+    axes = np.tile([0.0, 0.0, -1.0], (2, 1))
+    assert trace_chain(chain, axes, {}, TwoJointsSurface(beyond_m=0.002), TraceConfig()) == []
+    (piece,) = trace_chain(chain, axes, {}, TwoJointsSurface(beyond_m=1.0), TraceConfig())
+    assert len(piece.positions_m) == 2 and np.allclose(piece.positions_m[:, 1], 0.001)
+    along = np.arange(0.0, 0.1, STEP_M)  # a long chain: split where its sections' joint changes
+    long_chain = Chain(np.column_stack([along, np.zeros_like(along), np.zeros_like(along)]), False)
+    pieces = trace_chain(long_chain, np.tile([0.0, 0.0, -1.0], (len(along), 1)), {}, TwoJointsSurface(0.05),
+                         TraceConfig())
+    assert len(pieces) == 2 and sum(len(p.positions_m) for p in pieces) >= 45
+    assert np.allclose(pieces[0].positions_m[:, 1], 0.001) and np.allclose(pieces[1].positions_m[:, 1], 0.02)

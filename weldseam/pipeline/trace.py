@@ -36,6 +36,9 @@ ON_FITS_WINDOW = 5
 # of its fits, only those off the seams traced before count (inside_traced, for where it lies).
 COARSE_STRIDE = 4
 MIN_COARSE_SECTIONS = 12
+# Consecutive seam points of one piece lie at most this many times as far apart as their sections
+# (_follows).
+MAX_STRETCH = 2.0
 OUTLINE_REASON = "a corner with one face unseen whose other face is only an occluder's outline (a shadow's edge?)"
 
 
@@ -174,7 +177,8 @@ def trace_chain(
     if follow_fits:
         valid &= ~covered(positions, traced, beside_m)
     return [_piece([fits[i] for i in run], closed, joint, confidence)
-            for run, closed in _valid_runs(chain.points, valid, chain.closed, params.max_gap_m)]  # fmt: skip
+            for run, closed in _valid_runs(chain.points, positions, valid, chain.closed, params.max_gap_m,
+                                           max_offset)]  # fmt: skip
 
 
 def _piece(fits: list[SectionFit], closed: bool, joint: JointKind, confidence: float) -> TracedSeam:
@@ -259,18 +263,35 @@ def consistent(positions: np.ndarray, axes: np.ndarray, max_offset_m, max_turn_d
     return (np.linalg.norm(across, axis=1) <= max_offset_m) & (turn <= max_turn_deg)
 
 
-def _valid_runs(centres: np.ndarray, valid: np.ndarray, closed: bool, max_gap_m: float):
-    """Index runs of valid sections, split where the valid ones are more than max_gap_m apart."""
+def _follows(centres: np.ndarray, positions: np.ndarray, max_offset_m: np.ndarray) -> np.ndarray:
+    """(K - 1,) whether each seam point (K, 3) follows on from the one before: they lie at most
+    MAX_STRETCH times as far apart as their sections' centres (K, 3), plus the larger of their
+    max_offset_m (K,). A seam crossing its chain at up to 60 degrees stretches by at most 2; sections
+    a few mm apart whose points lie centimetres apart found two different joints in their windows
+    (a clamp's foot, then a corner 2 cm beyond it), which no neighbours outvote in a short chain
+    (consistent)."""
+    spacing = np.linalg.norm(np.diff(centres, axis=0), axis=1)
+    stretch = np.linalg.norm(np.diff(positions, axis=0), axis=1)
+    return stretch <= MAX_STRETCH * spacing + np.maximum(max_offset_m[:-1], max_offset_m[1:])
+
+
+def _valid_runs(centres: np.ndarray, positions: np.ndarray, valid: np.ndarray, closed: bool, max_gap_m: float,
+                max_offset_m: np.ndarray):
+    """Index runs of valid sections, split where the valid ones are more than max_gap_m apart, or
+    where their seam points lie farther apart than _follows allows (two joints, not one seam)."""
     indices = np.flatnonzero(valid)
     if len(indices) < 2:
         return []
     gaps = np.linalg.norm(np.diff(centres[indices], axis=0), axis=1)
-    breaks = np.flatnonzero(gaps > max_gap_m) + 1
+    apart = ~_follows(centres[indices], positions[indices], max_offset_m[indices])
+    breaks = np.flatnonzero((gaps > max_gap_m) | apart) + 1
     runs = np.split(indices, breaks)
     if closed:
-        wrap_gap = np.linalg.norm(centres[indices[0]] - centres[indices[-1]])
-        if len(runs) == 1 and wrap_gap <= max_gap_m:
+        ends = [indices[-1], indices[0]]
+        wraps = bool(np.linalg.norm(centres[indices[0]] - centres[indices[-1]]) <= max_gap_m
+                     and _follows(centres[ends], positions[ends], max_offset_m[ends])[0])
+        if len(runs) == 1 and wraps:
             return [(runs[0], True)]
-        if len(runs) > 1 and wrap_gap <= max_gap_m:
+        if len(runs) > 1 and wraps:
             runs = [np.concatenate([runs[-1], runs[0]])] + runs[1:-1]
     return [(run, False) for run in runs if len(run) >= 2]
