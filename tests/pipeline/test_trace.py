@@ -216,7 +216,8 @@ class TwoJointsSurface:
         self.beyond_m = beyond_m
 
     def fit_many(self, centres, travel, axes, lateral, kinds=None):
-        points = [centre + ([0.0, 0.02, 0.0] if centre[0] >= self.beyond_m else [0.0, 0.001, 0.0]) for centre in centres]
+        aside = [[0.0, 0.02, 0.0] if centre[0] >= self.beyond_m else [0.0, 0.001, 0.0] for centre in centres]
+        points = np.asarray(centres) + np.reshape(aside, (-1, 3))
         return [SectionFit(JointKind.FILLET, point, np.array([0.0, -0.7071, -0.7071])) for point in points]
 
 
