@@ -263,14 +263,13 @@ def consistent(positions: np.ndarray, axes: np.ndarray, max_offset_m, max_turn_d
     return (np.linalg.norm(across, axis=1) <= max_offset_m) & (turn <= max_turn_deg)
 
 
-def _follows(centres: np.ndarray, positions: np.ndarray, max_offset_m: np.ndarray) -> np.ndarray:
+def _follows(spacing: np.ndarray, positions: np.ndarray, max_offset_m: np.ndarray) -> np.ndarray:
     """(K - 1,) whether each seam point (K, 3) follows on from the one before: they lie at most
-    MAX_STRETCH times as far apart as their sections' centres (K, 3), plus the larger of their
-    max_offset_m (K,). A seam crossing its chain at up to 60 degrees stretches by at most 2; sections
+    MAX_STRETCH times as far apart as their sections' centres (`spacing`, K - 1, m), plus the larger
+    of their max_offset_m (K,). A seam crossing its chain at up to 60 degrees stretches by at most 2; sections
     a few mm apart whose points lie centimetres apart found two different joints in their windows
     (a clamp's foot, then a corner 2 cm beyond it), which no neighbours outvote in a short chain
     (consistent)."""
-    spacing = np.linalg.norm(np.diff(centres, axis=0), axis=1)
     stretch = np.linalg.norm(np.diff(positions, axis=0), axis=1)
     return stretch <= MAX_STRETCH * spacing + np.maximum(max_offset_m[:-1], max_offset_m[1:])
 
@@ -283,13 +282,13 @@ def _valid_runs(centres: np.ndarray, positions: np.ndarray, valid: np.ndarray, c
     if len(indices) < 2:
         return []
     gaps = np.linalg.norm(np.diff(centres[indices], axis=0), axis=1)
-    apart = ~_follows(centres[indices], positions[indices], max_offset_m[indices])
+    apart = ~_follows(gaps, positions[indices], max_offset_m[indices])
     breaks = np.flatnonzero((gaps > max_gap_m) | apart) + 1
     runs = np.split(indices, breaks)
     if closed:
         ends = [indices[-1], indices[0]]
-        wraps = bool(np.linalg.norm(centres[indices[0]] - centres[indices[-1]]) <= max_gap_m
-                     and _follows(centres[ends], positions[ends], max_offset_m[ends])[0])
+        wrap_gap = np.linalg.norm(centres[indices[0]] - centres[indices[-1]])
+        wraps = bool(wrap_gap <= max_gap_m and _follows(np.array([wrap_gap]), positions[ends], max_offset_m[ends])[0])
         if len(runs) == 1 and wraps:
             return [(runs[0], True)]
         if len(runs) > 1 and wraps:
