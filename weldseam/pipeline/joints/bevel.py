@@ -74,8 +74,7 @@ def fit(profile: SortedProfile) -> ProfileFit | NoFit:
     deepest = upper_decile(depth[groove])
     if deepest < params.groove_min_depth_m:
         return NoFit("depression shallower than joints.groove_min_depth_m")
-    gx, gd = x[groove], depth[groove]
-    sides = [edges for edges in (_edges(gx, gd, ends, bevel_side, depth_limit, sigma) for bevel_side in (0, 1))
+    sides = [edges for edges in (_edges(x, depth, groove, ends, bevel_side, depth_limit, sigma) for bevel_side in (0, 1))
              if edges is not None]
     if not sides:
         return NoFit("no bevel wall and square wall")
@@ -95,20 +94,32 @@ def fit(profile: SortedProfile) -> ProfileFit | NoFit:
                       tuple((float(a), float(b)) for a, b in outline))  # fmt: skip
 
 
-def _edges(x, depth, ends, bevel_side: int, depth_limit: float, sigma: float):
+def _edges(x_all, depth_all, groove, ends, bevel_side: int, depth_limit: float, sigma: float):
     """(bevel edge, square edge, bevel slope or None (hidden), score) along the surface with the
-    bevel on side `bevel_side` (0: lower x) of the depression (points x, depth), `ends` the
-    surface's (last point, edge past it) on each side, or None where the depression is not so.
+    bevel on side `bevel_side` (0: lower x) of the depression (the points `groove` of the profile's
+    x_all, depth_all), `ends` the surface's (last point, edge past it) on each side, or None where
+    the depression is not so.
+    The depression's points find the bevel wall and how far down it reaches; its line is then
+    fitted again to every point between that reach and the outer of the line's edge and the bevel
+    side's last surface point, chosen by position. Chosen by depth (the depression's, deeper than
+    depth_limit), the variable the line is fitted to, the wall's top keeps only the points noise
+    pushed down: the line comes out flatter, its edge outward of the true one, where the window
+    then starts and takes in the top points that passed for surface.
     The bevel wall's edge lies within EDGE_TOLERANCE_M of the surface's last point on its side, or
     within depth_limit / slope (m) of it: a wall point passes for surface down to `depth_limit`
     below it (a shallow bevel in 1 mm of noise: 2-5 mm); `sigma`: the surface's noise."""
     (bevel_last, bevel_hidden), (square_last, square_hidden) = ends[bevel_side], ends[1 - bevel_side]
     toward = 1.0 if bevel_side == 0 else -1.0  # from the bevel's side toward the square one
+    x, depth = x_all[groove], depth_all[groove]
     near_square = np.abs(x - square_last) <= SQUARE_WALL_M + np.abs(square_hidden - square_last)
     square = _square_wall(x[near_square], depth[near_square])
     square_x = square_hidden if square is None else square
     clear = toward * (square_x - x) > SQUARE_WALL_M  # the depression's points off the square wall
     bevel = _bevel_wall(x[clear], depth[clear], toward, sigma)
+    if bevel is not None:
+        start = min(bevel_last, bevel[0], key=lambda v: toward * v)  # the outer of the two
+        on_wall = (toward * (x_all - start) >= 0) & (toward * (bevel[3] - x_all) >= 0)
+        bevel = _bevel_wall(x_all[on_wall], depth_all[on_wall], toward, sigma) or bevel
     if bevel is not None:
         bevel_x, bevel_slope, score, root_x = bevel
         if abs(bevel_x - bevel_last) > max(EDGE_TOLERANCE_M, depth_limit / bevel_slope):
