@@ -358,3 +358,24 @@ def test_a_lattice_too_sparse_to_resolve_a_gap_takes_no_image_opening_for_one():
         alone += isinstance(fit_profile(u, w, PARAMS, {SQUARE_BUTT}), ProfileFit)
         shown += isinstance(fit_profile(u, w, PARAMS, {SQUARE_BUTT}, np.array([-0.0001, 0.0001, 0.0002])), ProfileFit)
     assert shown - alone <= 2  # without the step rule, all 30
+
+
+def test_a_gap_the_cloud_narrows_below_the_narrowest_opening_is_found_where_the_image_crosses_it():
+    """A 1 mm gap seen from 0.45 m (0.7 mm pixels): the pixels over its rims see plate, so the cloud's
+    opening is 0.3-0.45 mm, under joints.gap_min_m. The image's crossings of the gap, together near
+    the centre, find it where the opening is wider than the lattice's step; crossings spread over
+    3 mm (a dropout's blob) add nothing to what the cloud alone finds (its opening reaches
+    joints.gap_min_m in a few draws)."""
+    rng = np.random.default_rng(5)
+    shown = unshown = blob = 0
+    for _ in range(30):
+        u = np.arange(-0.025, 0.025, 0.00015)
+        u = np.sort(u + rng.normal(0, 0.00003, len(u)))
+        plate_w = rng.normal(0, 0.0003, len(u))
+        u_gap, w_gap = square_gap(u, plate_w, 0.0004, 0.0003)
+        fit = fit_profile(u_gap, w_gap, PARAMS, {SQUARE_BUTT}, np.array([0.0003, 0.0004, 0.0005]))
+        shown += isinstance(fit, ProfileFit) and abs(fit.u - 0.0004) < 0.0002
+        unshown += isinstance(fit_profile(u_gap, w_gap, PARAMS, {SQUARE_BUTT}), ProfileFit)
+        blob += isinstance(fit_profile(u_gap, w_gap, PARAMS, {SQUARE_BUTT}, np.array([-0.0025, -0.001, 0.0004])),
+                           ProfileFit)
+    assert shown >= 27 and unshown <= 10 and blob <= unshown

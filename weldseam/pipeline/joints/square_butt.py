@@ -16,7 +16,12 @@ points). Counting what was seen just beside the rims raised the sections on the 
 in the broad world's noisy scans, from 55 to 87 % (square_butt_3) and from 46 to 64 %
 (square_butt_2), and left random sections on flat plates at 0.7-4 %. Failing that, it is the
 opening the sensor's image shows, however wide the lattice's others: the one holding most of the
-section's image openings (where lines of pixels that returned nothing cross it: gaps.py). The two
+section's image openings (where lines of pixels that returned nothing cross it: gaps.py). Failing
+that too, where the image's crossings near the centre lie together, it is the opening between the
+surface points either side of them, however narrow: the pixels over a gap's rims see the plates,
+so the cloud narrows it (an independent scan's 1.07 mm gap seen from 0.43 m, 0.7 mm pixels, leaves
+0.4-0.7 mm between the cloud's points, under gap_min_m, in sections where the image's crossings
+lie within 0.2 mm of its centre); it need only be wider than the lattice's step. The two
 sides each hold a plate surface, and lines fitted to them agree (one plane: a step or a bend is no
 gap).
 
@@ -61,6 +66,10 @@ COPLANAR_RAD = np.radians(8.0)
 # far wall stands at one rim, and the fine cloud's 1 mm voxels merge its top with the surface
 # beside it, so its deeper points lie up to a voxel beyond the rim rather than between the rims.
 SEEN_THROUGH_M = 0.001
+# The image's crossings of one straight gap lie within this of their median: each is the middle
+# between the pixels either side of the gap, within half a pixel's footprint (0.55 mm at 0.7 m) of
+# its centre. A sparse surface's scattered dropouts put two crossings a mm or more apart.
+CROSSING_SPREAD_M = 0.0005
 # An opening the image shows is the gap only where it spans this many of the lattice's median steps.
 LATTICE_STEPS = 1.5
 
@@ -123,7 +132,28 @@ def _opening(u, residual, on_surface, openings_u, params: JointsConfig):
     for k in sorted(wide, key=lambda k: abs(middle[k])):
         if spacing[k] >= LATTICE_STEPS * step and _in_image(u, rims[k], rims[k + 1], openings_u):
             return float(u[rims[k]]), float(u[rims[k + 1]])
+    line = _image_line(u, rims, above, openings_u, step, params)
+    if line is not None:
+        return line
     return NoFit("no opening of joints.gap_min_m..gap_max_m in the surface")
+
+
+def _image_line(u, rims, above, openings_u, step: float, params: JointsConfig):
+    """(u_left, u_right): the surface points either side of the image's crossings within REACH_M of
+    the centre where those lie within CROSSING_SPREAD_M of their median (one line crossed: a
+    dropout's blob, or a sparse surface's dropouts, are crossed all across), at least LATTICE_STEPS x `step` and at most gap_max_m apart with
+    nothing above the surface between them; else None."""
+    near = openings_u[np.abs(openings_u) <= REACH_M]
+    if not len(near):
+        return None
+    centre = median(near)
+    k = int(np.searchsorted(u[rims], centre))
+    if not (np.all(np.abs(near - centre) <= CROSSING_SPREAD_M) and 0 < k < len(rims)):
+        return None
+    left, right = rims[k - 1], rims[k]
+    if LATTICE_STEPS * step <= u[right] - u[left] <= params.gap_max_m and above[right - 1] == above[left]:
+        return float(u[left]), float(u[right])
+    return None
 
 
 def _in_image(u, left: int, right: int, openings_u: np.ndarray) -> bool:
