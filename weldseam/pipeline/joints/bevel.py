@@ -41,8 +41,11 @@ SQUARE_WALL_M = 0.0008
 MIN_WALL_POINTS = 4
 MIN_WALL_FRACTION = 0.7
 WALL_BAND_M = 0.0005
-# A seen square wall reaches at least this far down.
+# A seen square wall reaches at least this far down, its points leaning by at most this along the
+# surface per depth (x on depth: the surface's noise spreads x, not the slope): 15 degrees. A
+# V-groove's wall within SQUARE_WALL_M of its edge, 1-2 mm deep there, leans 0.4-0.8.
 MIN_SQUARE_DEPTH_M = 0.001
+MAX_SQUARE_LEAN = np.tan(np.radians(15.0))
 # A bevel's root lies within this of the square edge when that wall is hidden (root gap 0-2 mm):
 # a V's hidden wall leaves its surface ending half the opening from the bottom.
 MAX_ROOT_GAP_M = 0.0025
@@ -142,7 +145,8 @@ def _square_wall(x: np.ndarray, depth: np.ndarray) -> float | None:
     on_wall = np.abs(x - position) <= SQUARE_WALL_M
     if np.count_nonzero(on_wall) < MIN_WALL_POINTS or np.ptp(depth[on_wall]) < MIN_SQUARE_DEPTH_M:
         return None
-    return position
+    _, lean = line(depth[on_wall], x[on_wall])  # x per m of depth: 0 square, tan(wall angle) sloped
+    return position if abs(lean) <= MAX_SQUARE_LEAN else None
 
 
 def _bevel_wall(x: np.ndarray, depth: np.ndarray, toward: float, surface_sigma: float):
