@@ -77,7 +77,7 @@ def fit(profile: SortedProfile) -> ProfileFit | NoFit:
     deepest = upper_decile(depth[groove])
     if deepest < params.groove_min_depth_m:
         return NoFit("depression shallower than joints.groove_min_depth_m")
-    sides = [edges for edges in (_edges(x, depth, groove, ends, bevel_side, depth_limit, sigma) for bevel_side in (0, 1))
+    sides = [edges for edges in (_edges(x, depth, groove, ends, side, depth_limit, sigma) for side in (0, 1))
              if edges is not None]
     if not sides:
         return NoFit("no bevel wall and square wall")
@@ -138,7 +138,8 @@ def _edges(x_all, depth_all, groove, ends, bevel_side: int, depth_limit: float, 
 def _square_wall(x: np.ndarray, depth: np.ndarray) -> float | None:
     """Where a square wall stands along the surface (the median x of its points), or None when
     its points (those near the square side's surface end) do not reach MIN_SQUARE_DEPTH_M down
-    within SQUARE_WALL_M of one place."""
+    within SQUARE_WALL_M of one place, or lean along the surface by more than MAX_SQUARE_LEAN
+    per depth (a line x = a + b depth through them)."""
     if len(x) < MIN_WALL_POINTS:
         return None
     position = median(x)

@@ -132,17 +132,18 @@ def _opening(u, residual, on_surface, openings_u, params: JointsConfig):
     for k in sorted(wide, key=lambda k: abs(middle[k])):
         if spacing[k] >= LATTICE_STEPS * step and _in_image(u, rims[k], rims[k + 1], openings_u):
             return float(u[rims[k]]), float(u[rims[k + 1]])
-    line = _image_line(u, rims, above, openings_u, step, params)
-    if line is not None:
-        return line
+    crossed = _image_line(u, rims, above, openings_u, step, params)
+    if crossed is not None:
+        return crossed
     return NoFit("no opening of joints.gap_min_m..gap_max_m in the surface")
 
 
 def _image_line(u, rims, above, openings_u, step: float, params: JointsConfig):
     """(u_left, u_right): the surface points either side of the image's crossings within REACH_M of
     the centre where those lie within CROSSING_SPREAD_M of their median (one line crossed: a
-    dropout's blob, or a sparse surface's dropouts, are crossed all across), at least LATTICE_STEPS x `step` and at most gap_max_m apart with
-    nothing above the surface between them; else None."""
+    dropout's blob, or a sparse surface's dropouts, are crossed all across), at least
+    LATTICE_STEPS x `step` and at most gap_max_m apart with nothing above the surface between
+    them; else None."""
     near = openings_u[np.abs(openings_u) <= REACH_M]
     if not len(near):
         return None
