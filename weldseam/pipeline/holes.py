@@ -13,8 +13,9 @@ from weldseam.pipeline.section import RECENTRE_M, FineSurface, PointFlag, Sectio
 from weldseam.pipeline.seek import Extension, next_fit, plain_fit
 from weldseam.pipeline.trace import Hole
 
-# The seam must fit this many times in a row beyond a hole (or up to the part's end), and the seam
-# line across it hold no more than HOLE_STRAYS points within HOLE_RADIUS_M (across_hole).
+# The seam must fit this many times in a row beyond a hole, on data at least a slab apart (or up to
+# the part's end), and the seam line across it hold no more than HOLE_STRAYS points within
+# HOLE_RADIUS_M (across_hole).
 HOLE_CONFIRM = 2
 HOLE_RADIUS_M = 0.0015
 HOLE_STRAYS = 2
@@ -68,7 +69,9 @@ def across_hole(extension: Extension, last_point, last_axis, aims) -> list[Secti
     joint: _same_joint) within SIDEWAYS_SHARE of its distance sideways and DEPTH_SHARE in depth of
     any aim's prediction (the fits at a hole's edge may lean, and the aim from before them finds
     the seam where the end's own tangent misses it: hole_aim; an inside corner's with both faces
-    seen: _measured) must be followed by HOLE_CONFIRM - 1 more fits in a row, or by the part's
+    seen: _measured) must be followed by HOLE_CONFIRM - 1 more fits in a row, the first and the last
+    at least a section's slab apart (sections a step apart share a third of their slabs' points: a
+    strip 1.4 mm wide beyond a hole, nothing past it, gave two fits), or by the part's
     end (_part_ends_after): a hole can reach to within a section or two of the plate's end, and
     the scan then sees past the plate right after the fits (a stray fit inside a longer hole has
     nothing after it). The hole is bridged by a cubic
@@ -78,7 +81,7 @@ def across_hole(extension: Extension, last_point, last_axis, aims) -> list[Secti
     inside corner, whose seam point lies on the part's surfaces, none between the hole's edges)
     and in sight (hidden)."""
     params = extension.params
-    step = params.step_m
+    step, slab = params.step_m, extension.surface.params.slab_m
     leads = _leads(last_point, aims)
     for distance in np.arange(params.max_skip_m + step, params.max_hole_m + step / 2, step):
         predictions = _predictions(aims, leads, distance)
@@ -96,15 +99,21 @@ def across_hole(extension: Extension, last_point, last_axis, aims) -> list[Secti
         _, (origin, direction, bend), lead, travel = min(near, key=lambda candidate: candidate[0])
         leaving = ahead(origin, direction, bend, lead)[1]  # the nearest aim's travel at the end
         run = [fit]
-        while len(run) < HOLE_CONFIRM:
+        while not _confirmed(run, slab):
             following = next_fit(extension, run[-1].point_m, run[-1].torch_axis, (travel, bend))
             if following is None:
                 break
             run.append(following)
-        if len(run) < HOLE_CONFIRM and not _part_ends_after(extension, run[-1], travel, last_point, last_axis, leaving):
+        if not _confirmed(run, slab) and not _part_ends_after(extension, run[-1], travel, last_point, last_axis, leaving):
             return None
         return _bridge(extension, last_point, last_axis, leaving, run, _arrival(run, travel, bend))
     return None
+
+
+def _confirmed(run: list[SectionFit], slab_m: float) -> bool:
+    """Whether the fits beyond a hole confirm the seam there: HOLE_CONFIRM of them, the first and
+    the last at least `slab_m` (a section's thickness) apart, so that they rest on different points."""
+    return len(run) >= HOLE_CONFIRM and float(np.linalg.norm(run[-1].point_m - run[0].point_m)) >= slab_m
 
 
 def _measured(joint: JointKind, fit: SectionFit) -> bool:
