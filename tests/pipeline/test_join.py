@@ -53,6 +53,21 @@ def test_a_groove_over_a_block_edge_joins_through_the_bend():
     assert np.min(np.linalg.norm(seam.positions_m - [0, 0, 0.1], axis=1)) < 1e-9
 
 
+def test_pieces_far_either_side_of_a_bend_wait_for_the_extension_but_in_line_they_join():
+    """Before the extension, a corner only within corner_join_m: the corner of two pieces' end lines
+    misses the seam by their directions' error times the gap, and the gap stays unsampled."""
+    top = piece(line([0, 0.08, 0.1], [0, 0.003, 0.1]))
+    side_points = line([0, 0.0, 0.085], [0, 0.0, 0.07])  # 15 mm below the edge, 6 degrees off
+    side = piece(side_points + np.array([0, -0.0015, 0]) * np.linspace(1, 0, len(side_points))[:, None])
+    assert len(join_pieces([top, side], join_m=0.025, max_turn_deg=100.0, step_m=0.002, corner_join_m=0.012)) == 2
+    (seam,) = join_pieces([top, side], join_m=0.025, max_turn_deg=100.0, step_m=0.002)  # as after the extension
+    known = np.vstack([top.positions_m, side.positions_m])
+    (corner,) = [p for p in seam.positions_m if np.min(np.linalg.norm(known - p, axis=1)) > 1e-9]
+    assert np.linalg.norm(corner - [0, 0, 0.1]) > 0.001  # the lines' corner, off the edge
+    far = piece(line([0, 0.18, 0.1], [0, 0.1, 0.1]))  # in line with the top piece, 20 mm on: joined straight
+    assert len(join_pieces([top, far], join_m=0.025, max_turn_deg=100.0, step_m=0.002, corner_join_m=0.012)) == 1
+
+
 def test_parallel_seams_do_not_join():
     assert len(join([piece(line([0, 0, 0], [0.1, 0, 0])), piece(line([0, 0.02, 0], [0.1, 0.02, 0]))])) == 2
 

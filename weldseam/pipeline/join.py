@@ -31,11 +31,12 @@ CONTINUE_SLACK = 2.0
 MAX_CURVE_RADIUS_M = 0.1
 
 
-def join_seams(seams: list[TracedSeam], params: JoinConfig, step_m: float) -> list[TracedSeam]:
-    """The seams trimmed where they overlap, joined, and trimmed again (a join may bridge onto a
-    stretch another piece also covers)."""
+def join_seams(seams: list[TracedSeam], params: JoinConfig, step_m: float,
+               corner_join_m: float | None = None) -> list[TracedSeam]:
+    """The seams trimmed where they overlap, joined (through a corner only within `corner_join_m`;
+    None: join_m), and trimmed again (a join may bridge onto a stretch another piece also covers)."""
     joined = join_pieces(trim_overlaps(seams, tolerance_m=params.overlap_m), join_m=params.join_m,
-                         max_turn_deg=params.max_turn_deg, step_m=step_m)  # fmt: skip
+                         max_turn_deg=params.max_turn_deg, step_m=step_m, corner_join_m=corner_join_m)  # fmt: skip
     return trim_overlaps(joined, tolerance_m=params.overlap_m)
 
 
@@ -111,7 +112,7 @@ def _densified(points: np.ndarray, closed: bool, step_m: float) -> np.ndarray:
 
 
 def join_pieces(
-    seams: list[TracedSeam], *, join_m: float, max_turn_deg: float, step_m: float
+    seams: list[TracedSeam], *, join_m: float, max_turn_deg: float, step_m: float, corner_join_m: float | None = None
 ) -> list[TracedSeam]:
     """Join pieces of one seam and close loops.
 
@@ -120,12 +121,14 @@ def join_pieces(
     of one and an end of the other are within `join_m`, face each other (their outward directions differ from opposite by
     less than `max_turn_deg`, so a groove turning over a block edge stays one seam) and the
     gap runs along their mean direction (within 60 degrees); pieces joined straight must continue
-    each other (_continues: `step_m` is the extension's step). Where a third seam also ends (the
+    each other (_continues: `step_m` is the extension's step); pieces joined through a corner lie
+    within `corner_join_m` (None: join_m). Where a third seam also ends (the
     junction of a Y or T) nothing is joined: the branches stay separate seams. An open seam whose own ends meet that way is a closed loop.
     """
     pieces = sorted(seams, key=lambda s: (-len(s.positions_m), tuple(s.positions_m[0])))
     cos_turn = np.cos(np.radians(max_turn_deg))
     cos_along = np.cos(np.radians(min(max_turn_deg, 60.0)))
+    corner_join_m = join_m if corner_join_m is None else corner_join_m
     while True:
         # The closest feasible join first, so a small piece inside a gap is joined before
         # the gap is bridged past it.
@@ -136,7 +139,7 @@ def join_pieces(
                 if first.closed or second.closed or not one_joint(first.joint, second.joint):
                     continue
                 others = [piece for k, piece in enumerate(pieces) if k not in (i, j)]
-                candidate = _joined(first, second, join_m, cos_turn, cos_along, others, step_m)
+                candidate = _joined(first, second, (join_m, corner_join_m), cos_turn, cos_along, others, step_m)
                 if candidate is not None and (best is None or candidate[0] < best[0]):
                     best = (candidate[0], i, j, candidate[1])
         if best is None:
@@ -148,10 +151,12 @@ def join_pieces(
 
 
 def _joined(
-    first: TracedSeam, second: TracedSeam, join_m: float, cos_turn: float, cos_along: float,
+    first: TracedSeam, second: TracedSeam, reach_m: tuple[float, float], cos_turn: float, cos_along: float,
     others: list[TracedSeam], step_m: float,
 ) -> tuple[float, TracedSeam] | None:
-    """(gap, joined seam) for the closest way to join two pieces end to end, or None."""
+    """(gap, joined seam) for the closest way to join two pieces end to end, or None; `reach_m`:
+    (join_m, corner_join_m) as join_pieces."""
+    join_m, corner_join_m = reach_m
     best = None
     # Whether each piece has a direction of its own does not depend on which way it runs.
     a_directed, b_directed = _directed(first.positions_m), _directed(second.positions_m)
@@ -179,6 +184,8 @@ def _joined(
                 continue
             leads = _leads(first_way, second_way)
             corner = None if _curves_on(leads, step_m) else _corner(a, out_a, b, out_b, join_m)
+            if corner is not None and distance > corner_join_m:
+                continue
             if corner is None and not _continues(leads, max(first.across_spread, second.across_spread), step_m):
                 continue
             between = (np.empty((0, 3)), np.empty((0, 3)), np.empty(0, np.uint8)) if corner is None else \
