@@ -72,6 +72,46 @@ def test_a_groove_in_depth_quantised_in_1_mm_steps_is_found(rng):
     assert abs(np.mean(errors)) < 0.0003 and np.median(np.abs(errors)) < 0.0005
 
 
+def test_a_noisy_grooves_edges_lie_where_its_walls_leave_the_surface_not_at_their_shallowest_points():
+    """Within the surface's noise band (3 sigma) lie a wall's shallowest points too: taken for
+    surface, they end it inside the edge and the wall's line is fitted to its lower part only."""
+    rng = np.random.default_rng(7)
+    errors = []
+    for _ in range(200):
+        u, w = profile(v_groove(0.0, half_open=0.004, depth=0.006), rng, noise=0.0005)
+        fit = fit_profile(u, w, PARAMS, kinds={V_GROOVE})
+        errors.append(abs(fit.u))
+    assert np.median(errors) < 0.00027  # 0.21 mm; 0.34 when the band's lower tail ended the surface
+
+
+def oblique_v(rng, noise, view_deg=43.0, half_open=0.004, slope=1.53, mixed=5, pitch=0.0004):
+    """(u, w, toward) of a V seen from view_deg off its axis on the -u side: the near wall hidden,
+    the far wall seen from where the line of sight over the near rim meets it, and `mixed`
+    pixels along that line (a depth edge's mixed pixels); noise in w, a third of it in u."""
+    ray = np.array([np.sin(np.radians(view_deg)), -np.cos(np.radians(view_deg))])  # away from the camera
+    depth = slope * half_open
+    plate = np.arange(-0.025, 0.025, pitch)
+    plate = plate[np.abs(plate) >= half_open]
+    reach = -2 * depth / (ray[1] - slope * ray[0])  # along the ray from the near rim to the far wall
+    wall = np.arange(-half_open + reach * ray[0], half_open, pitch)
+    along = rng.uniform(0, reach, mixed)
+    u = np.concatenate([plate, wall, -half_open + along * ray[0]])
+    w = np.concatenate([np.zeros(len(plate)), -depth + slope * wall, along * ray[1]])
+    return u + rng.normal(0, noise / 3, len(u)), w + rng.normal(0, noise, len(u)), (-ray[0], -ray[1])
+
+
+def test_a_groove_seen_obliquely_with_mixed_pixels_over_its_near_rim_is_found_and_centred():
+    rng = np.random.default_rng(7)
+    centres = []
+    for _ in range(200):
+        u, w, toward = oblique_v(rng, 0.0005)
+        fit = fit_profile(u, w, PARAMS, kinds={V_GROOVE}, toward=toward)
+        if not isinstance(fit, NoFit):
+            centres.append(fit.u)
+    assert len(centres) >= 170  # 187; 126 when the rim's mixed pixels ended the surface
+    assert np.median(np.abs(centres)) < 0.0004
+
+
 def test_fillet_corner_and_bisector(rng):
     u, w = profile(lambda u: np.abs(u - 0.002), rng)  # 90-degree corner at u = 2 mm
     fit = fit_profile(u, w, PARAMS)
