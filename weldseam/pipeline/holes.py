@@ -104,7 +104,8 @@ def across_hole(extension: Extension, last_point, last_axis, aims) -> list[Secti
             if following is None:
                 break
             run.append(following)
-        if not _confirmed(run, slab) and not _part_ends_after(extension, run[-1], travel, last_point, last_axis, leaving):
+        confirmed = _confirmed(run, slab)
+        if not confirmed and not _part_ends_after(extension, run[-1], travel, last_point, last_axis, leaving):
             return None
         return _bridge(extension, last_point, last_axis, leaving, run, _arrival(run, travel, bend))
     return None
