@@ -139,7 +139,7 @@ def join_pieces(
                 if first.closed or second.closed or not one_joint(first.joint, second.joint):
                     continue
                 others = [piece for k, piece in enumerate(pieces) if k not in (i, j)]
-                candidate = _joined(first, second, (join_m, corner_join_m), cos_turn, cos_along, others, step_m)
+                candidate = _joined(first, second, join_m, corner_join_m, cos_turn, cos_along, others, step_m)
                 if candidate is not None and (best is None or candidate[0] < best[0]):
                     best = (candidate[0], i, j, candidate[1])
         if best is None:
@@ -151,12 +151,11 @@ def join_pieces(
 
 
 def _joined(
-    first: TracedSeam, second: TracedSeam, reach_m: tuple[float, float], cos_turn: float, cos_along: float,
+    first: TracedSeam, second: TracedSeam, join_m: float, corner_join_m: float, cos_turn: float, cos_along: float,
     others: list[TracedSeam], step_m: float,
 ) -> tuple[float, TracedSeam] | None:
-    """(gap, joined seam) for the closest way to join two pieces end to end, or None; `reach_m`:
-    (join_m, corner_join_m) as join_pieces."""
-    join_m, corner_join_m = reach_m
+    """(gap, joined seam) for the closest way to join two pieces end to end (join_m and
+    corner_join_m as join_pieces), or None."""
     best = None
     # Whether each piece has a direction of its own does not depend on which way it runs.
     a_directed, b_directed = _directed(first.positions_m), _directed(second.positions_m)
