@@ -242,6 +242,40 @@ def test_an_opening_the_image_shows_need_not_stand_out_of_the_lattice():
     assert shown >= 18 and unshown <= 10 and elsewhere == unshown
 
 
+def test_a_gaps_centre_is_where_the_image_crosses_it_unless_its_far_wall_was_seen():
+    """Pixels straddling a gap's rim return a depth between the plate's and the floor's: those
+    over one rim lie within the surface's noise band and narrow the cloud's opening from that
+    side, so its middle moves off the gap. The image's crossings (the middles between the pixels
+    either side of the gap) centre it. Where the far wall was seen through the gap, a crossing
+    ends on the wall's points that noise brought nearer the camera, off toward it: the opening's
+    rims centre it."""
+    rng = np.random.default_rng(11)
+    crossed, uncrossed, walled = [], [], []
+    for _ in range(30):  # a 1.2 mm gap at u = 0 in a 0.7 mm lattice; its left rim's pixels mixed
+        u = np.sort(np.arange(-0.025, 0.025, 0.0007) + rng.normal(0, 0.0001, 72))
+        w = rng.normal(0, 0.0003, len(u))
+        mixed = (u > -0.0006) & (u < 0.0001)
+        keep = (np.abs(u) >= 0.0006) | mixed
+        gap_u, gap_w = u[keep], np.where(mixed, w - 0.0005, w)[keep]
+        crossings = rng.normal(0, 0.0001, 3)
+        fit = fit_profile(gap_u, gap_w, PARAMS, {SQUARE_BUTT}, crossings)
+        crossed.append(fit.u if isinstance(fit, ProfileFit) else np.nan)
+        fit = fit_profile(gap_u, gap_w, PARAMS, {SQUARE_BUTT})
+        uncrossed.append(fit.u if isinstance(fit, ProfileFit) else np.nan)
+        # A 3 mm gap seen from the right, 30 degrees off: its far (left) wall down to 4 mm, spread
+        # 1 mm toward the camera by range noise; the crossings off toward the camera.
+        plates = np.abs(u) >= 0.0015
+        wall_w = -rng.uniform(0.002, 0.004, 6)
+        wall_u = -0.0015 + rng.uniform(0.0, 0.001, 6)
+        order = np.argsort(np.r_[u[plates], wall_u])
+        fit = fit_profile(np.r_[u[plates], wall_u][order], np.r_[w[plates], wall_w][order], PARAMS, {SQUARE_BUTT},
+                          0.0006 + rng.normal(0, 0.0002, 3))  # fmt: skip
+        walled.append(fit.u if isinstance(fit, ProfileFit) else np.nan)
+    assert np.count_nonzero(np.isfinite(crossed)) >= 24 and np.nanmedian(np.abs(crossed)) < 0.00015
+    assert np.nanmedian(uncrossed) > 0.00015  # the cloud's opening alone: off toward the unmixed rim
+    assert np.count_nonzero(np.isfinite(walled)) >= 24 and np.nanmedian(np.abs(walled)) < 0.0003
+
+
 def test_where_the_lattice_hides_the_gap_the_opening_most_image_openings_lie_in_is_it():
     """A 0.5 mm gap in a 0.4 mm lattice jittered by 0.2 mm (a 1 mm voxel cloud's section) is rarely
     the widest opening there. Most of the section's image openings lying in it make it the gap;
