@@ -133,12 +133,11 @@ def _opening(u, residual, on_surface, openings_u, params: JointsConfig):
         return NoFit("too few surface points")
     spacing = np.diff(u[rims])
     middle = (u[rims[1:]] + u[rims[:-1]]) / 2
-    wide = np.flatnonzero((spacing >= params.gap_min_m) & (spacing <= params.gap_max_m) & (np.abs(middle) <= REACH_M))
-    above = np.cumsum(residual > 0)  # points above the surface up to each index
+    clear = _clear(rims, residual)
+    wide = np.flatnonzero((spacing >= params.gap_min_m) & (spacing <= params.gap_max_m) & (np.abs(middle) <= REACH_M)
+                          & clear)  # fmt: skip
     for k in sorted(wide, key=lambda k: abs(middle[k])):
         left, right = rims[k], rims[k + 1]
-        if above[right - 1] != above[left]:
-            continue
         others = np.abs(middle - middle[k]) <= params.face_radius_m
         others[k] = False
         ratio = 1.0 if _seen_through(u, residual, on_surface, left, right) else UNIQUE_RATIO
@@ -150,18 +149,25 @@ def _opening(u, residual, on_surface, openings_u, params: JointsConfig):
     for k in sorted(wide, key=lambda k: abs(middle[k])):
         if spacing[k] >= LATTICE_STEPS * step and _in_image(u, rims[k], rims[k + 1], openings_u):
             return float(u[rims[k]]), float(u[rims[k + 1]])
-    crossed = _image_line(u, rims, above, openings_u, step, params)
+    crossed = _image_line(u, rims, clear, openings_u, step, params)
     if crossed is not None:
         return crossed
     return NoFit("no opening of joints.gap_min_m..gap_max_m in the surface")
 
 
-def _image_line(u, rims, above, openings_u, step: float, params: JointsConfig):
+def _clear(rims: np.ndarray, residual: np.ndarray) -> np.ndarray:
+    """(len(rims) - 1,) bool: whether no point lies above the surface (residual > 0) between each two
+    neighbouring surface points (indices `rims`, ascending): a gap's opening holds nothing over it."""
+    above = np.cumsum(residual > 0)  # points above the surface up to each index
+    return above[rims[1:] - 1] == above[rims[:-1]]
+
+
+def _image_line(u, rims, clear, openings_u, step: float, params: JointsConfig):
     """(u_left, u_right): the surface points either side of the image's crossings within REACH_M of
     the centre where those lie within CROSSING_SPREAD_M of their median (one line crossed: a
     dropout's blob, or a sparse surface's dropouts, are crossed all across), at least
     LATTICE_STEPS x `step` and at most gap_max_m apart with nothing above the surface between
-    them; else None."""
+    them (`clear`: _clear); else None."""
     near = openings_u[np.abs(openings_u) <= REACH_M]
     if not len(near):
         return None
@@ -170,7 +176,7 @@ def _image_line(u, rims, above, openings_u, step: float, params: JointsConfig):
     if not (np.all(np.abs(near - centre) <= CROSSING_SPREAD_M) and 0 < k < len(rims)):
         return None
     left, right = rims[k - 1], rims[k]
-    if LATTICE_STEPS * step <= u[right] - u[left] <= params.gap_max_m and above[right - 1] == above[left]:
+    if LATTICE_STEPS * step <= u[right] - u[left] <= params.gap_max_m and clear[k - 1]:
         return float(u[left]), float(u[right])
     return None
 
