@@ -8,8 +8,8 @@ position error <= 0.5 mm; >= 95 % of the seen seam within 2 mm of the path; mean
 error <= 3 degrees; in a scene with two kinds (a lap and a fillet, a V-groove and a square
 butt), each seam named by its own. Known gaps are strict xfails: when a change closes one, its
 test fails until the mark is removed, so the list stays the truth about what the planner does.
-Seeds 0-4; today 209 of the 220 criteria hold (lap, bevel, outside corner, square butt, tack
-welds, pipe on plate and the two-kind scenes mostly; saddle and the shallow valley least; 208 on
+Seeds 0-4; today 210 of the 220 criteria hold (lap, bevel, outside corner, square butt, tack
+welds, pipe on plate and the two-kind scenes mostly; saddle and the shallow valley least; 209 on
 machines that put clutter 1 just past 0.5 mm: ON_THE_EDGE), and every seam of the two-kind scenes
 gets its own kind.
 """
@@ -42,13 +42,12 @@ KNOWN_GAPS: dict[tuple[str, int], set[str]] = {
     # branch pipe hides, and is joined to it along its curve (join._curves_on: no longer through a
     # corner 8.7 mm off the seam, 1.20 -> 0.31 mm, 7.7 -> 2.0 degrees); 92 % covered.
     ("saddle", 1): {"coverage"},
-    ("valley", 1): {"coverage"},
     # Found since the wide valley pass (20 mm); its 147-degree corner scatters 1.3 mm across.
     ("valley", 4): {"position", "coverage", "axis"},
 }
 # Criteria on the edge of their limit, which machines of one kind put either side of it: the same
 # code and packages (constraints.txt) render the synthetic scans a little differently (a sample
-# scan one 1 mm voxel apart), and clutter 1 comes out 0.524 mm off on one machine (Xeon with
+# scan one 1 mm voxel apart), and clutter 1 comes out 0.536 mm off on one machine (Xeon with
 # AVX-512 FP16) and under 0.5 on another (the session before, and its CI). Not strict.
 ON_THE_EDGE: dict[tuple[str, int], set[str]] = {
     ("clutter", 1): {"position"},

@@ -575,7 +575,7 @@ def test_a_fillet_stops_where_the_camera_sees_past_the_parts_end_without_seeking
     """Past the tee's end the camera sees the table 10 mm below the seam line: the part ends there,
     and the fillet stops without the sections of a hole search (max_skip_m to max_hole_m ahead,
     one step apart). Without a single camera (no view) nothing says it is no hole: those sections
-    are fitted before the fillet stops at the same place."""
+    are fitted before the fillet stops at its last fit (and is not run on to the part's end)."""
     from scipy.spatial import cKDTree
 
     from weldseam.config import PlanConfig
@@ -594,9 +594,51 @@ def test_a_fillet_stops_where_the_camera_sees_past_the_parts_end_without_seeking
     assert -0.006 < stopped[:, 0].max() < 0.001, "to the tee's end, not beyond it"
     assert np.abs(stopped[:, 1:]).max() < 0.001, "in the corner"
     blind = CountingSurface(FineSurface(points, cKDTree(points), section_params(PlanConfig()), None))
-    assert np.array_equal(extend_seam(seam, blind, params).positions_m, stopped)
+    fitted = extend_seam(seam, blind, params).positions_m  # not run on: nothing says the part ends
+    assert len(fitted) <= len(stopped) and np.array_equal(fitted, stopped[: len(fitted)])
     assert blind.fitted - seen.fitted >= round((params.max_hole_m - params.max_skip_m) / STEP_M)
 
+
+def tee_extended(points, view_from=(0.0, -0.25, 0.35)):
+    """The tee's fillet (tee_on_a_table) traced over x -75..-55 mm, extended with a single camera."""
+    from scipy.spatial import cKDTree
+
+    from weldseam.config import PlanConfig
+    from weldseam.pipeline.occlusion import ViewBuffer
+    from weldseam.pipeline.section import FineSurface, section_params
+
+    axis = -np.array([0.0, -1.0, 1.0]) / np.sqrt(2)
+    x = np.arange(-0.075, -0.055, STEP_M)
+    seam = TracedSeam(np.column_stack([x, np.zeros(len(x)), np.zeros(len(x))]), np.tile(axis, (len(x), 1)), False,
+                      JointKind.FILLET, 1.0)
+    view = ViewBuffer.build(points, np.array(view_from), 0.001)
+    surface = FineSurface(points, cKDTree(points), section_params(PlanConfig()), view)
+    return extend_seam(seam, surface, replace(ExtendConfig(), step_m=STEP_M, max_hole_m=0.05))
+
+
+def test_at_the_parts_end_the_seam_runs_on_to_it_where_the_last_sections_fail():
+    """The sections within a few mm of the tee's end fail (their window reaches past its end face):
+    the fits stop 3 mm short on three of four scans. Seeing past the part's end, the seam is run on
+    along its line to where the joint's two faces end, bridged."""
+    run_out = 0
+    for seed in range(4):
+        extended_seam = tee_extended(tee_on_a_table(np.random.default_rng(seed)))
+        positions, flags = extended_seam.positions_m, extended_seam.point_flags
+        assert -0.0015 < positions[:, 0].max() < 0.0005, "on to the tee's end, not beyond it"
+        assert np.abs(positions[:, 1:]).max() < 0.0005, "in the corner"
+        run_out += bool(flags[-1] & PointFlag.BRIDGED)
+    assert run_out >= 3, "what no section fitted is marked bridged"
+
+
+def test_a_seam_whose_joint_ends_before_the_part_does_is_not_run_on_to_the_parts_end(monkeypatch, rng):
+    """The web ends 10 mm before the flange does: past it the flange alone goes on to the part's
+    end, and the seam is not run on over it (the run-out adds nothing to where the fits stop)."""
+    points = tee_on_a_table(rng)
+    web = points[:, 2] > 0.0005
+    points = points[~(web & (points[:, 0] > -0.01))]
+    positions = tee_extended(points).positions_m
+    monkeypatch.setattr(extend, "_run_out_step", lambda extension, end: None)
+    assert np.array_equal(positions, tee_extended(points).positions_m)
 
 
 def test_a_hole_on_an_inside_corners_line_is_the_stretch_without_data_between_its_edges():

@@ -13,7 +13,8 @@ re-aimed by them:
    from the sections where both were (carried.py);
 3. a turn over a 90-degree edge (a groove over a block's edge, a seam up a wall: turn.py);
 4. a tack weld over the seam just ahead, crossed on the seam line (tacks.py);
-5. the part's end: where the scan sees past the part just ahead, the seam stops there;
+5. the part's end: where the scan sees past the part just ahead, the seam runs on along its
+   straight line to where the part ends, and stops there;
 6. a hole in the scan over the whole seam, crossed and interpolated (holes.py).
 
 When none finds the seam, the end stops. An extension stops where it comes within two steps of
@@ -47,6 +48,17 @@ from weldseam.pipeline.trace import Hole, TracedSeam
 
 # The groove template a bridged section assumes: the median of this many latest fits.
 TEMPLATE_MEMORY = 6
+# The joint is at a point on the seam's line where this many scan points lie on either side of it
+# (across the seam: both faces, both plates) within RUN_OUT_RADIUS_M of it (plus a groove's
+# half-opening), at or ahead of it along the line and within RUN_OUT_RADIUS_M of it along the torch
+# axis (the table under a plate's end, 6-10 mm below, is not the joint; _run_out_step).
+RUN_OUT_POINTS = 3
+RUN_OUT_RADIUS_M = 0.003
+# The seam is run on to the part's end only where that end lies within this of its last point:
+# the sections that fail near an end span 2-6 mm of it (its slab and window reach past the end
+# face); a seam that stops farther before the part's end (a groove filled up to a run-off, a web
+# shorter than its flange) stops where it stops.
+RUN_OUT_MAX_M = 0.006
 # Where the line through a shallow corner's fitted end points and its curve's tangent differ by
 # more than this, the next fit is also sought along the line (SeamEnd.aims).
 LINE_AIM_DEG = 5.0
@@ -359,6 +371,45 @@ def extend_end(
     return steps, None
 
 
+def _run_out_step(extension: Extension, end: SeamEnd) -> Step | None:
+    """At the part's end (_part_end_step), the seam run on to it: along the seam's straight line over
+    its last stretch (seam_line of the fitted points), every step_m from the last point's foot on it
+    up to the last point that still has the joint's two sides at or ahead of it (RUN_OUT_POINTS
+    scan points each side across the seam within RUN_OUT_RADIUS_M, plus a groove's half-opening,
+    not behind it along the line nor farther along the torch axis: a face or plate alone going on,
+    or the table past the part's end, is no joint), bridged,
+    with the last axis; None where the part is there beyond RUN_OUT_MAX_M, or comes back within a
+    step of it (a hole), or ends within a step. Sections within a few mm of a part's end fail (their
+    slab and window reach past the end face, a tube's end, a Y's junction), and the path stopped
+    2-6 mm short of it. The end's curve is no guide there: fitted to the last fits, it leans with
+    them (at a Y's junction, 2.8 mm off within 8 mm); the line over 32 mm does not."""
+    params = extension.params
+    line = seam_line(end.fitted)
+    if line is None:
+        return None
+    template = end.template()
+    radius = RUN_OUT_RADIUS_M + (template.half_opening_m or 0.0 if template is not None else 0.0)
+    distances = np.arange(params.step_m, RUN_OUT_MAX_M + params.step_m * 1.5, params.step_m)
+    foot = line.point + ((end.positions[-1] - line.point) @ line.direction) * line.direction
+    ahead_of = [(foot + distance * line.direction, line.direction) for distance in distances]
+    points = extension.surface.points
+    lateral = unit(np.cross(line.direction, end.axes[-1]))
+    axis = unit(np.cross(lateral, line.direction))
+    held = []
+    for (predicted, travel), members in zip(ahead_of, extension.surface.tree.query_ball_point(
+            [predicted for predicted, _ in ahead_of], radius)):  # fmt: skip
+        offsets = points[members] - predicted
+        near = (offsets @ travel >= 0.0) & (np.abs(offsets @ axis) <= RUN_OUT_RADIUS_M)
+        across = offsets[near] @ lateral
+        held.append(min(np.count_nonzero(across < 0.0), np.count_nonzero(across > 0.0)) >= RUN_OUT_POINTS)
+    held = np.array(held)
+    if held.all() or not held[0] or held[np.argmin(held):].any():
+        return None
+    count = int(np.argmin(held))
+    return Step([SectionFit(extension.joint, predicted, end.axes[-1], bridged=True, flags=int(PointFlag.BRIDGED))
+                 for predicted, _ in ahead_of[:count]])  # fmt: skip
+
+
 def _next_step(extension: Extension, end: SeamEnd) -> Step | None:
     """The next fit ahead along the predicted curve (seek.next_fit, bridged over dropouts)."""
     return _seek_step(extension, end, end.template())
@@ -407,18 +458,19 @@ def _tack_step(extension: Extension, end: SeamEnd) -> Step | None:
 
 
 def _part_end_step(extension: Extension, end: SeamEnd) -> Step | None:
-    """STOP where the scan sees past the part's end within part_end_reach_m ahead: in a hole the
-    camera sees nothing, past the part's end it sees what lies beyond (the table), and a seam on
-    another part in line beyond that gap is another seam. A groove's (bridge.part_ends_ahead:
-    deeper than its bottom, in its opening); an inside corner's (_corner_ends_ahead)."""
+    """Where the scan sees past the part's end within part_end_reach_m ahead, the seam run on to
+    that end (_run_out_step), then STOP: in a hole the camera sees nothing, past the part's end it
+    sees what lies beyond (the table), and a seam on another part in line beyond that gap is
+    another seam. A groove's (bridge.part_ends_ahead: deeper than its bottom, in its opening); an
+    inside corner's (_corner_ends_ahead)."""
     template = end.template()
     direction, bend = end.heading()
     reach = extension.params.part_end_reach_m
     if template is not None and part_ends_ahead(extension.surface, end.positions[-1], direction, end.axes[-1],
                                                 template, reach):  # fmt: skip
-        return STOP
+        return _run_out_step(extension, end) or STOP
     if extension.joint in ON_SURFACE and _corner_ends_ahead(extension, end.positions[-1], direction, bend):
-        return STOP
+        return _run_out_step(extension, end) or STOP
     return None
 
 
