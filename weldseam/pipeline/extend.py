@@ -14,7 +14,7 @@ re-aimed by them:
 3. a turn over a 90-degree edge (a groove over a block's edge, a seam up a wall: turn.py);
 4. a tack weld over the seam just ahead, crossed on the seam line (tacks.py);
 5. the part's end: where the scan sees past the part just ahead, the seam runs on along its
-   straight line to where the part ends, and stops there;
+   straight line to where the joint ends (at most 6 mm), and stops there;
 6. a hole in the scan over the whole seam, crossed and interpolated (holes.py).
 
 When none finds the seam, the end stops. An extension stops where it comes within two steps of
@@ -377,37 +377,33 @@ def _run_out_step(extension: Extension, end: SeamEnd) -> Step | None:
     up to the last point that still has the joint's two sides at or ahead of it (RUN_OUT_POINTS
     scan points each side across the seam within RUN_OUT_RADIUS_M, plus a groove's half-opening,
     not behind it along the line nor farther along the torch axis: a face or plate alone going on,
-    or the table past the part's end, is no joint), bridged,
-    with the last axis; None where the part is there beyond RUN_OUT_MAX_M, or comes back within a
-    step of it (a hole), or ends within a step. Sections within a few mm of a part's end fail (their
-    slab and window reach past the end face, a tube's end, a Y's junction), and the path stopped
-    2-6 mm short of it. The end's curve is no guide there: fitted to the last fits, it leans with
-    them (at a Y's junction, 2.8 mm off within 8 mm); the line over 32 mm does not."""
-    params = extension.params
+    or the table past the part's end, is no joint), bridged, with the last axis; None where the
+    joint is there beyond RUN_OUT_MAX_M, or comes back within a step of it (a hole), or ends within
+    a step. Sections within a few mm of a part's end fail (their slab and window reach past the end
+    face, a tube's end, a Y's junction), and the path stopped 2-6 mm short of it. The end's curve
+    is no guide there: fitted to the last fits, it leans with them (at a Y's junction, 2.8 mm off
+    within 8 mm); the line over 32 mm does not."""
     line = seam_line(end.fitted)
     if line is None:
         return None
     template = end.template()
     radius = RUN_OUT_RADIUS_M + (template.half_opening_m or 0.0 if template is not None else 0.0)
-    distances = np.arange(params.step_m, RUN_OUT_MAX_M + params.step_m * 1.5, params.step_m)
+    step = extension.params.step_m
     foot = line.point + ((end.positions[-1] - line.point) @ line.direction) * line.direction
-    ahead_of = [(foot + distance * line.direction, line.direction) for distance in distances]
-    points = extension.surface.points
+    ahead_of = foot + np.arange(step, RUN_OUT_MAX_M + 1.5 * step, step)[:, None] * line.direction
     lateral = unit(np.cross(line.direction, end.axes[-1]))
     axis = unit(np.cross(lateral, line.direction))
     held = []
-    for (predicted, travel), members in zip(ahead_of, extension.surface.tree.query_ball_point(
-            [predicted for predicted, _ in ahead_of], radius)):  # fmt: skip
-        offsets = points[members] - predicted
-        near = (offsets @ travel >= 0.0) & (np.abs(offsets @ axis) <= RUN_OUT_RADIUS_M)
+    for predicted, members in zip(ahead_of, extension.surface.tree.query_ball_point(ahead_of, radius)):
+        offsets = extension.surface.points[members] - predicted
+        near = (offsets @ line.direction >= 0.0) & (np.abs(offsets @ axis) <= RUN_OUT_RADIUS_M)
         across = offsets[near] @ lateral
         held.append(min(np.count_nonzero(across < 0.0), np.count_nonzero(across > 0.0)) >= RUN_OUT_POINTS)
     held = np.array(held)
     if held.all() or not held[0] or held[np.argmin(held):].any():
         return None
-    count = int(np.argmin(held))
     return Step([SectionFit(extension.joint, predicted, end.axes[-1], bridged=True, flags=int(PointFlag.BRIDGED))
-                 for predicted, _ in ahead_of[:count]])  # fmt: skip
+                 for predicted in ahead_of[: np.argmin(held)]])  # fmt: skip
 
 
 def _next_step(extension: Extension, end: SeamEnd) -> Step | None:
