@@ -637,7 +637,7 @@ def test_a_seam_whose_joint_ends_before_the_part_does_is_not_run_on_to_the_parts
     web = points[:, 2] > 0.0005
     points = points[~(web & (points[:, 0] > -0.01))]
     positions = tee_extended(points).positions_m
-    monkeypatch.setattr(extend, "_run_out_step", lambda extension, end: None)
+    monkeypatch.setattr(extend, "_run_out_step", lambda extension, end, template: None)
     assert np.array_equal(positions, tee_extended(points).positions_m)
 
 

@@ -371,7 +371,7 @@ def extend_end(
     return steps, None
 
 
-def _run_out_step(extension: Extension, end: SeamEnd) -> Step | None:
+def _run_out_step(extension: Extension, end: SeamEnd, template: GrooveTemplate | None) -> Step | None:
     """At the part's end (_part_end_step), the seam run on to it: along the seam's straight line over
     its last stretch (seam_line of the fitted points), every step_m from the last point's foot on it
     up to the last point that still has the joint's two sides at or ahead of it (RUN_OUT_POINTS
@@ -382,11 +382,10 @@ def _run_out_step(extension: Extension, end: SeamEnd) -> Step | None:
     a step. Sections within a few mm of a part's end fail (their slab and window reach past the end
     face, a tube's end, a Y's junction), and the path stopped 2-6 mm short of it. The end's curve
     is no guide there: fitted to the last fits, it leans with them (at a Y's junction, 2.8 mm off
-    within 8 mm); the line over 32 mm does not."""
+    within 8 mm); the line over 32 mm does not. `template`: the end's groove template (SeamEnd.template)."""
     line = seam_line(end.fitted)
     if line is None:
         return None
-    template = end.template()
     radius = RUN_OUT_RADIUS_M + (template.half_opening_m or 0.0 if template is not None else 0.0)
     step = extension.params.step_m
     foot = line.point + ((end.positions[-1] - line.point) @ line.direction) * line.direction
@@ -464,9 +463,9 @@ def _part_end_step(extension: Extension, end: SeamEnd) -> Step | None:
     reach = extension.params.part_end_reach_m
     if template is not None and part_ends_ahead(extension.surface, end.positions[-1], direction, end.axes[-1],
                                                 template, reach):  # fmt: skip
-        return _run_out_step(extension, end) or STOP
+        return _run_out_step(extension, end, template) or STOP
     if extension.joint in ON_SURFACE and _corner_ends_ahead(extension, end.positions[-1], direction, bend):
-        return _run_out_step(extension, end) or STOP
+        return _run_out_step(extension, end, template) or STOP
     return None
 
 

@@ -121,9 +121,9 @@ def fit(profile: SortedProfile) -> ProfileFit | NoFit:
 def _centre(u, residual, on_surface, u_left: float, u_right: float, openings_u: np.ndarray) -> float:
     """The seam's u (m): the median of the image's crossings within SEEN_THROUGH_M of the opening
     (u_left, u_right) where nothing deeper was seen through it, else its middle."""
-    near = openings_u[(openings_u >= u_left - SEEN_THROUGH_M) & (openings_u <= u_right + SEEN_THROUGH_M)]
-    deep = ~on_surface & (residual < 0) & (u >= u_left - SEEN_THROUGH_M) & (u <= u_right + SEEN_THROUGH_M)
-    return median(near) if len(near) and not deep.any() else (u_left + u_right) / 2
+    near = openings_u[_near(openings_u, u_left, u_right)]
+    seen_through = _seen_through(u, residual, on_surface, u_left, u_right)
+    return median(near) if len(near) and not seen_through else (u_left + u_right) / 2
 
 
 def _opening(u, residual, on_surface, openings_u, params: JointsConfig):
@@ -140,14 +140,14 @@ def _opening(u, residual, on_surface, openings_u, params: JointsConfig):
         left, right = rims[k], rims[k + 1]
         others = np.abs(middle - middle[k]) <= params.face_radius_m
         others[k] = False
-        ratio = 1.0 if _seen_through(u, residual, on_surface, left, right) else UNIQUE_RATIO
+        ratio = 1.0 if _seen_through(u, residual, on_surface, u[left], u[right]) else UNIQUE_RATIO
         if spacing[k] >= ratio * spacing[others].max(initial=0.0):
             return float(u[left]), float(u[right])
     # Where the fine cloud's lattice hides the gap among openings as wide, the image's opening is it,
     # where the lattice's own step is finer (sparse points far off or grazing resolve no gap).
     step = median(spacing)
     for k in sorted(wide, key=lambda k: abs(middle[k])):
-        if spacing[k] >= LATTICE_STEPS * step and _in_image(u, rims[k], rims[k + 1], openings_u):
+        if spacing[k] >= LATTICE_STEPS * step and _in_image(u[rims[k]], u[rims[k + 1]], openings_u):
             return float(u[rims[k]]), float(u[rims[k + 1]])
     crossed = _image_line(u, rims, clear, openings_u, step, params)
     if crossed is not None:
@@ -181,18 +181,19 @@ def _image_line(u, rims, clear, openings_u, step: float, params: JointsConfig):
     return None
 
 
-def _in_image(u, left: int, right: int, openings_u: np.ndarray) -> bool:
-    """Whether the sensor's image shows the opening between the surface points `left` and `right`
-    (indices): most of the section's image openings (SortedProfile.openings_u) lie within
-    SEEN_THROUGH_M of it. A surface seen grazing misses pixels all over, and its sections hold
-    image openings all across."""
-    inside = (openings_u >= u[left] - SEEN_THROUGH_M) & (openings_u <= u[right] + SEEN_THROUGH_M)
-    return np.count_nonzero(inside) > len(openings_u) / 2
+def _near(values: np.ndarray, u_left: float, u_right: float) -> np.ndarray:
+    """(len(values),) bool: which u `values` lie within SEEN_THROUGH_M of the opening (u_left, u_right)."""
+    return (values >= u_left - SEEN_THROUGH_M) & (values <= u_right + SEEN_THROUGH_M)
 
 
-def _seen_through(u, residual, on_surface, left: int, right: int) -> bool:
-    """Whether points deeper than the surface lie within SEEN_THROUGH_M of the opening between
-    the surface points `left` and `right` (indices): what the camera saw through it."""
-    deep = ~on_surface & (residual < 0)
-    near = (u >= u[left] - SEEN_THROUGH_M) & (u <= u[right] + SEEN_THROUGH_M)
-    return bool(np.any(deep & near))
+def _in_image(u_left: float, u_right: float, openings_u: np.ndarray) -> bool:
+    """Whether the sensor's image shows the opening (u_left, u_right) between two surface points:
+    most of the section's image openings (SortedProfile.openings_u) lie near it (_near). A surface
+    seen grazing misses pixels all over, and its sections hold image openings all across."""
+    return np.count_nonzero(_near(openings_u, u_left, u_right)) > len(openings_u) / 2
+
+
+def _seen_through(u, residual, on_surface, u_left: float, u_right: float) -> bool:
+    """Whether points deeper than the surface lie near the opening (u_left, u_right) between two
+    surface points (_near): what the camera saw through it."""
+    return bool(np.any(~on_surface & (residual < 0) & _near(u, u_left, u_right)))
